@@ -1,0 +1,1 @@
+"""The input side of spatial motion doodles: data model, files, signals, the Segmenter, the CLI."""

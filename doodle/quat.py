@@ -1,0 +1,73 @@
+"""Vectorised quaternion helpers, scalar-last ``(x, y, z, w)`` like scipy's Rotation.
+
+Arithmetic is written out component by component in a fixed order, so the per-sample
+(streaming) code in :mod:`doodle.segmenter` can repeat it with Python floats and get
+bit-identical results.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def normalise(q: np.ndarray) -> np.ndarray:
+    """Unit quaternions, rows of ``q`` (n, 4) divided by their norm."""
+    x, y, z, w = q[:, 0], q[:, 1], q[:, 2], q[:, 3]
+    norm = np.sqrt(x * x + y * y + z * z + w * w)
+    return q / norm[:, None]
+
+
+def hemisphere_signs(q: np.ndarray) -> np.ndarray:
+    """±1 per row so that ``signs[:, None] * q`` has no sign flips between neighbours.
+
+    Row i is flipped relative to row i-1 when their dot product is negative (q and -q are
+    the same rotation; smoothing and differences need a continuous representative).
+    """
+    if len(q) == 0:
+        return np.ones(0)
+    a, b = q[1:], q[:-1]
+    dot = a[:, 0] * b[:, 0] + a[:, 1] * b[:, 1] + a[:, 2] * b[:, 2] + a[:, 3] * b[:, 3]
+    flips = np.concatenate([[False], dot < 0])
+    return np.where(np.cumsum(flips) % 2 == 1, -1.0, 1.0)
+
+
+def make_continuous(q: np.ndarray) -> np.ndarray:
+    """``q`` with signs chosen so consecutive rows are in the same hemisphere."""
+    return q * hemisphere_signs(q)[:, None]
+
+
+def multiply(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Hamilton product ``a ⊗ b`` row by row (the rotation b, then a)."""
+    ax, ay, az, aw = a[..., 0], a[..., 1], a[..., 2], a[..., 3]
+    bx, by, bz, bw = b[..., 0], b[..., 1], b[..., 2], b[..., 3]
+    return np.stack(
+        [
+            aw * bx + ax * bw + ay * bz - az * by,
+            aw * by - ax * bz + ay * bw + az * bx,
+            aw * bz + ax * by - ay * bx + az * bw,
+            aw * bw - ax * bx - ay * by - az * bz,
+        ],
+        axis=-1,
+    )
+
+
+def conjugate(q: np.ndarray) -> np.ndarray:
+    return q * np.array([-1.0, -1.0, -1.0, 1.0])
+
+
+def rotate(q: np.ndarray, u: np.ndarray) -> np.ndarray:
+    """Rotate vectors ``u`` (n, 3) by unit quaternions ``q`` (n, 4)."""
+    x, y, z, w = q[:, 0], q[:, 1], q[:, 2], q[:, 3]
+    ux, uy, uz = u[:, 0], u[:, 1], u[:, 2]
+    tx = 2.0 * (y * uz - z * uy)
+    ty = 2.0 * (z * ux - x * uz)
+    tz = 2.0 * (x * uy - y * ux)
+    return np.stack(
+        [ux + w * tx + (y * tz - z * ty), uy + w * ty + (z * tx - x * tz), uz + w * tz + (x * ty - y * tx)],
+        axis=-1,
+    )
+
+
+def rotate_inverse(q: np.ndarray, u: np.ndarray) -> np.ndarray:
+    """Express world vectors ``u`` in the local frames ``q`` (``R^T u``)."""
+    return rotate(conjugate(q), u)

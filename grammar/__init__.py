@@ -1,0 +1,1 @@
+"""The motion-token language: expressions, automata, the Matcher (later issues)."""

@@ -1,0 +1,1 @@
+"""Laban effort features and classifiers (later issues)."""

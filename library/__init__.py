@@ -1,0 +1,1 @@
+"""The action library and its loader (later issues)."""

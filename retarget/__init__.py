@@ -1,0 +1,1 @@
+"""Skeletons, BVH, terrain, trajectory transfer and stylisation (later issues)."""
