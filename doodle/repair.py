@@ -90,31 +90,33 @@ def fill_gaps(name, t, p, q, valid, max_gap: float, source: str = "<memory>"):
 
 
 class GapFiller:
-    """Streaming :func:`fill_gaps`: ``push`` returns the samples that are final, in order."""
+    """Streaming :func:`fill_gaps` on tuples of floats: ``push`` returns the samples that are
+    final, in order, as ``(t, (px, py, pz), (qx, qy, qz, qw))``."""
 
     def __init__(self, name: str, max_gap: float, source: str = "<stream>"):
         self.name, self.max_gap, self.source = name, max_gap, source
-        self.last: tuple | None = None  # (t, p, q) of the last tracked sample
+        self.last: tuple | None = None  # the last tracked sample
         self.held: list[float] = []  # times of untracked samples waiting for tracking
 
-    def push(self, t: float, p: np.ndarray, q: np.ndarray, valid: bool) -> list[tuple]:
+    def push(self, t: float, p: tuple, q: tuple, valid: bool) -> list[tuple]:
         if not valid:
             self.held.append(t)
             return []
-        out = []
-        if self.held:
-            times = np.array(self.held)
-            if self.last is None:
-                out = [(ti, p, q) for ti in self.held]
-            else:
-                ta, pa, qa = self.last
-                if t - ta > self.max_gap:
-                    raise _gap_error(self.name, self.source, ta, t, self.max_gap)
-                ps, qs = _interpolate(ta, pa, qa, t, p, q, times)
-                out = list(zip(self.held, ps, qs))
-            self.held = []
-        self.last = (t, p, q)
-        out.append((t, p, q))
+        sample = (t, p, q)
+        if not self.held:
+            self.last = sample
+            return [sample]
+        if self.last is None:
+            out = [(ti, p, q) for ti in self.held]
+        else:
+            ta, pa, qa = self.last
+            if t - ta > self.max_gap:
+                raise _gap_error(self.name, self.source, ta, t, self.max_gap)
+            ps, qs = _interpolate(ta, np.array(pa), np.array(qa), t, np.array(p), np.array(q), np.array(self.held))
+            out = [(ti, tuple(pi), tuple(qi)) for ti, pi, qi in zip(self.held, ps.tolist(), qs.tolist())]
+        self.held = []
+        self.last = sample
+        out.append(sample)
         return out
 
     def close(self) -> list[tuple]:

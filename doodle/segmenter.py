@@ -171,24 +171,35 @@ class Segmenter:
         return None if self._cur is None else Token(NAMES[self._cur], self._cur_start, self._n)
 
     def push(self, t: float, p, q, valid: bool = True) -> list[Token]:
-        t, p, q = float(t), np.asarray(p, dtype=float), np.asarray(q, dtype=float)
-        at = f"{self.source}: track {self.name} sample {self._pushed}"
-        if not np.isfinite(t):
-            raise DoodleError(f"{at}: time is not a finite number")
-        if self._last_t is not None and not t > self._last_t:
-            raise DoodleError(f"{at}: time {t:.6f} s does not come after {self._last_t:.6f} s")
+        """Add one sample (time in s, position (3), quaternion xyzw (4)); the tokens it completes."""
+        t = float(t)
+        px, py, pz = p.tolist() if hasattr(p, "tolist") else map(float, p)
+        qx, qy, qz, qw = q.tolist() if hasattr(q, "tolist") else map(float, q)
+        if not (t - t == 0.0 and (self._last_t is None or t > self._last_t)):
+            self._bad_sample(t, "time")
         if valid:
-            if not (np.isfinite(p).all() and np.isfinite(q).all()):
-                raise DoodleError(f"{at} (t={t:.6f} s): tracked pose is NaN or infinite")
-            norm = float(np.sqrt(q @ q))
-            if abs(norm - 1.0) > 0.1:
-                raise DoodleError(f"{at} (t={t:.6f} s): quaternion norm {norm:.3g} is not 1")
+            total = px + py + pz + qx + qy + qz + qw
+            norm2 = qx * qx + qy * qy + qz * qz + qw * qw
+            if not (total - total == 0.0 and 0.81 <= norm2 <= 1.21):
+                self._bad_sample(t, "pose", norm2)
         self._last_t = t
         self._pushed += 1
         out: list[Token] = []
-        for sample in self._gaps.push(t, p, q, valid):
+        for sample in self._gaps.push(t, (px, py, pz), (qx, qy, qz, qw), valid):
             self._smooth(sample, out)
         return out
+
+    def _bad_sample(self, t: float, what: str, norm2: float = 1.0):
+        at = f"{self.source}: track {self.name} sample {self._pushed}"
+        if what == "time":
+            if not np.isfinite(t):
+                raise DoodleError(f"{at}: time is not a finite number")
+            raise DoodleError(f"{at}: time {t:.6f} s does not come after {self._last_t:.6f} s")
+        if np.isfinite(norm2) and np.isfinite(t):
+            norm = float(np.sqrt(norm2))
+            if abs(norm - 1.0) > 0.1:
+                raise DoodleError(f"{at} (t={t:.6f} s): quaternion norm {norm:.3g} is not 1")
+        raise DoodleError(f"{at} (t={t:.6f} s): tracked pose is NaN or infinite")
 
     def close(self) -> list[Token]:
         """Flush: the remaining tokens, including the one in progress."""
@@ -206,14 +217,13 @@ class Segmenter:
         return out
 
     def _smooth(self, sample: tuple, out: list[Token]) -> None:
-        t, p, q = sample
+        t, (px, py, pz), (qx, qy, qz, qw) = sample
         a = self._raw_q
-        if a is not None and q[0] * a[0] + q[1] * a[1] + q[2] * a[2] + q[3] * a[3] < 0:
+        if a is not None and qx * a[0] + qy * a[1] + qz * a[2] + qw * a[3] < 0:
             self._sign = -self._sign  # as quat.hemisphere_signs: parity of flips so far
-        self._raw_q = q
-        row = np.empty(8)
-        row[0], row[1:4], row[4:] = t, p, q * self._sign
-        for r in self._smoother.push(row):
+        self._raw_q = (qx, qy, qz, qw)
+        s = self._sign
+        for r in self._smoother.push((t, px, py, pz, qx * s, qy * s, qz * s, qw * s)):
             self._classify(r, out)
 
     def _classify(self, row: np.ndarray, out: list[Token]) -> None:

@@ -18,6 +18,8 @@ arithmetic in the same order and give bit-identical results.
 
 from __future__ import annotations
 
+from collections import deque
+
 import numpy as np
 from scipy.signal import savgol_coeffs
 
@@ -64,64 +66,57 @@ class StreamingSmoother:
     """:func:`smooth` one row at a time: ``push`` returns the rows that became final.
 
     Output row i is known once row ``i + h`` has arrived; :meth:`close` returns the tail.
+    Rows go into a long buffer so the current window is always one contiguous slice.
     """
 
+    BUFFER = 4096
+
     def __init__(self, kernel: np.ndarray, channels: int):
-        self.kernel = kernel
         self.h = len(kernel) // 2
         self.width = len(kernel)
         self.weights = kernel[:, None]
-        self.head: list[np.ndarray] = []  # first h+1 rows, kept for the start reflection
-        self.ring = np.zeros((2 * self.width, channels))
-        self.count = 0  # rows written into the ring (virtual sequence incl. left padding)
-        self.last: list[np.ndarray] = []  # the most recent h+1 real rows, for the end reflection
-        self.n = 0
+        self.buf = np.zeros((max(self.BUFFER, 4 * self.width), channels))
+        self.tmp = np.zeros((self.width, channels))
+        self.fill = 0  # rows of the virtual sequence (left padding + real rows) now in buf
+        self.head: list = []  # the first h+1 rows, kept for the start reflection
+        self.last: deque = deque(maxlen=self.h + 1)  # the latest rows, for the end reflection
+        self.n = 0  # real rows pushed
 
-    def _feed(self, row: np.ndarray) -> np.ndarray | None:
-        slot = self.count % self.width
-        self.ring[slot] = row
-        self.ring[slot + self.width] = row
-        self.count += 1
-        if self.count < self.width:
+    def _feed(self, row) -> np.ndarray | None:
+        if self.fill == len(self.buf):  # slide the last width-1 rows to the front
+            keep = self.width - 1
+            self.buf[:keep] = self.buf[self.fill - keep : self.fill]
+            self.fill = keep
+        self.buf[self.fill] = row
+        self.fill += 1
+        if self.fill < self.width:
             return None
-        start = self.count % self.width
-        window = self.ring[start : start + self.width]
+        window = self.buf[self.fill - self.width : self.fill]
         # Row-by-row accumulation over axis 0 of a C-contiguous array: the same order of
-        # additions as the loop in :func:`smooth`.
-        return np.add.reduce(self.weights * window, axis=0)
+        # additions as the loop in :func:`smooth`, hence bit-identical results.
+        return np.add.reduce(np.multiply(self.weights, window, out=self.tmp), axis=0)
 
-    def push(self, row: np.ndarray) -> list[np.ndarray]:
+    def push(self, row) -> list[np.ndarray]:
+        """Add one row (a sequence of ``channels`` floats)."""
         self.n += 1
         if self.h == 0:
-            return [row.copy()]
+            return [np.array(row, dtype=float)]
         self.last.append(row)
-        if len(self.last) > self.h + 1:
-            self.last.pop(0)
-        if self.n <= self.h + 1:
-            self.head.append(row)
-            if self.n < self.h + 1:
-                return []
-            x0 = self.head[0]
-            out = []
-            for j in range(self.h, 0, -1):
-                self._feed(2.0 * x0 - self.head[j])
-            for r in self.head:
-                y = self._feed(r)
-                if y is not None:
-                    out.append(y)
-            return out
-        y = self._feed(row)
-        return [y]
+        if self.n > self.h + 1:
+            return [self._feed(row)]
+        self.head.append(row)
+        if self.n < self.h + 1:
+            return []
+        head = np.array(self.head, dtype=float)
+        for j in range(self.h, 0, -1):
+            self._feed(2.0 * head[0] - head[j])
+        return [y for y in map(self._feed, head) if y is not None]
 
     def close(self) -> list[np.ndarray]:
         """Rows not yet returned, using the end reflection (or unsmoothed if too short)."""
         if self.h == 0:
             return []
         if self.n <= self.h:
-            return [r.copy() for r in self.head]
-        xn = self.last[-1]
-        out = []
-        for j in range(1, self.h + 1):
-            y = self._feed(2.0 * xn - self.last[-1 - j])
-            out.append(y)
-        return out
+            return [np.array(r, dtype=float) for r in self.head]
+        last = np.array(self.last, dtype=float)
+        return [self._feed(2.0 * last[-1] - last[-1 - j]) for j in range(1, self.h + 1)]
