@@ -1,0 +1,215 @@
+"""The ``doodle`` command line.
+
+Every command reports bad input as one line ``doodle: error: …`` naming the file (and line,
+track or field) and exits non-zero; set ``DOODLE_DEBUG=1`` to see a traceback instead.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+import warnings
+from pathlib import Path
+
+from doodle.errors import DoodleError
+
+EXIT_BAD_INPUT = 1
+EXIT_USAGE = 2
+
+
+def _segmenter_options(p: argparse.ArgumentParser) -> None:
+    g = p.add_argument_group("segmenter")
+    g.add_argument("--calibration", metavar="FILE", help="TOML from `doodle calibrate` (thresholds, mounts)")
+    g.add_argument("--eps", type=float, help="stillness threshold, m/s (default 0.05)")
+    g.add_argument("--theta", type=float, help="translation if |v| >= theta*|w|, m/rad (default 0.3)")
+    g.add_argument("--smoothing", choices=["laplacian", "savgol"], help="denoising filter (default laplacian)")
+    g.add_argument("--max-gap", type=float, help="seconds of lost tracking repaired by interpolation (default 0.5)")
+
+
+def _input_options(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--convention", choices=["unity", "openvr", "doodle"], help="coordinate convention of CSV input")
+    p.add_argument("--columns", metavar="MAP", help="CSV column map, e.g. t=time,c0.px=x,c0.py=y,…")
+    p.add_argument("--tracks", metavar="NAMES", help="comma-separated track names (default: all)")
+
+
+def _params(args):
+    from dataclasses import replace
+
+    from doodle.segmenter import SegmenterParams
+    from doodle.settings import read_calibration
+
+    params, mounts = SegmenterParams(), {}
+    if args.calibration:
+        params, mounts = read_calibration(args.calibration, params)
+    given = {k: getattr(args, a) for k, a in (("eps", "eps"), ("theta", "theta"), ("smoothing", "smoothing"),
+                                             ("max_gap", "max_gap")) if getattr(args, a) is not None}
+    return replace(params, **given), mounts
+
+
+def _load(path, args, mounts):
+    from doodle.csvimport import parse_column_map
+    from doodle.loader import load
+
+    columns = parse_column_map(args.columns) if args.columns else None
+    tracks = [t.strip() for t in args.tracks.split(",") if t.strip()] if args.tracks else None
+    return load(path, args.convention, columns, tracks, mounts)
+
+
+def cmd_tokens(args) -> int:
+    from doodle.segmenter import tokenize_doodle
+
+    params, mounts = _params(args)
+    failed = 0
+    for path in args.files:
+        try:
+            doodle = _load(path, args, mounts)
+            tokens = tokenize_doodle(doodle, params)
+        except DoodleError as e:
+            _error(e)
+            failed += 1
+            continue
+        t = doodle.t
+        last = len(t) - 1
+
+        def seconds(i: int) -> float:
+            return round(float(t[min(i, last)] - t[0]), 6)
+
+        if args.json:
+            record = {
+                "file": str(path),
+                "tracks": {
+                    name: [{"token": k.name, "start": seconds(k.start), "end": seconds(k.end),
+                            "samples": [k.start, k.end]} for k in toks]
+                    for name, toks in tokens.items()
+                },
+            }
+            print(json.dumps(record), flush=True)
+        else:
+            print(f"{path}  ({len(doodle.tracks)} track{'s' * (len(doodle.tracks) != 1)}, "
+                  f"{doodle.t[-1]:.2f} s at {doodle.rate:g} Hz, device {doodle.device})")
+            for name, toks in tokens.items():
+                print(f"  {name}: {' '.join(k.name for k in toks) or '(no tokens)'}")
+                if args.verbose:
+                    for k in toks:
+                        print(f"    {seconds(k.start):8.3f} {seconds(k.end):8.3f}  {k.name}")
+    return EXIT_BAD_INPUT if failed else 0
+
+
+def cmd_import(args) -> int:
+    from doodle.fileformat import write_doodle
+
+    doodle = _load(args.file, args, None)
+    write_doodle(args.output, doodle, convention="doodle")
+    print(f"{args.output}: {len(doodle.tracks)} track(s), {len(doodle.t)} samples, {doodle.t[-1]:.2f} s")
+    return 0
+
+
+def cmd_info(args) -> int:
+    failed = 0
+    for path in args.files:
+        try:
+            doodle = _load(path, args, {})
+        except DoodleError as e:
+            _error(e)
+            failed += 1
+            continue
+        print(f"{path}: device {doodle.device}, {doodle.rate:g} Hz nominal, {len(doodle.t)} samples, "
+              f"{doodle.t[-1]:.2f} s")
+        for tr in doodle.tracks:
+            lost = 1.0 - tr.valid.mean()
+            extra = "".join(f", {k} {v}" for k, v in (("role", tr.role), ("serial", tr.serial)) if v)
+            print(f"  {tr.name}{extra}: lost tracking {lost:.1%} of samples")
+    return EXIT_BAD_INPUT if failed else 0
+
+
+def cmd_calibrate(args) -> int:
+    from doodle.calibration import calibrate
+    from doodle.devices import calibrate_mount
+    from doodle.settings import write_calibration
+
+    params, mounts = _params(args)
+    if args.forward:
+        doodle = _load(args.forward, args, {})
+        for tr in doodle.tracks:
+            mounts[tr.name] = calibrate_mount(tr)
+    gestures = [args.translation, args.rotation, args.slow]
+    if any(gestures):
+        if not all(gestures):
+            raise DoodleError("calibrate: --translation, --rotation and --slow go together")
+        first = [_load(g, args, mounts) for g in gestures]
+        params = calibrate(*(d.tracks[0] for d in first), first[0].rate, params)
+    if not args.forward and not any(gestures):
+        raise DoodleError("calibrate: give --forward FILE and/or --translation, --rotation and --slow")
+    write_calibration(args.output, params, mounts)
+    print(f"{args.output}: eps {params.eps:.4g} m/s, theta {params.theta:.4g} m/rad"
+          + "".join(f", mount {n} {tuple(round(x, 4) for x in q)}" for n, q in mounts.items()))
+    return 0
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="doodle", description="Spatial motion doodles: VR controller motion to character animation.")
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+
+    p = sub.add_parser("tokens", help="print the motion tokens of doodle or CSV files")
+    p.add_argument("files", nargs="+", metavar="FILE")
+    _input_options(p)
+    p.add_argument("--json", action="store_true", help="one JSON object per file per line")
+    p.add_argument("-v", "--verbose", action="store_true", help="also list each token's time range")
+    _segmenter_options(p)
+    p.set_defaults(run=cmd_tokens)
+
+    p = sub.add_parser("import", help="convert a CSV recording into a doodle file")
+    p.add_argument("file", metavar="CSV")
+    p.add_argument("-o", "--output", required=True, metavar="FILE.doodle")
+    _input_options(p)
+    p.set_defaults(run=cmd_import)
+
+    p = sub.add_parser("info", help="describe doodle files: device, rate, tracks, lost tracking")
+    p.add_argument("files", nargs="+", metavar="FILE")
+    _input_options(p)
+    p.set_defaults(run=cmd_info)
+
+    p = sub.add_parser("calibrate", help="measure a prop's forward and the Segmenter's thresholds")
+    p.add_argument("-o", "--output", required=True, metavar="FILE.toml")
+    p.add_argument("--forward", metavar="FILE", help="hold the prop still facing forward, then push it forward")
+    p.add_argument("--translation", metavar="FILE", help="a minimal translation-only gesture")
+    p.add_argument("--rotation", metavar="FILE", help="a minimal rotation-only gesture")
+    p.add_argument("--slow", metavar="FILE", help="your slowest deliberate motion")
+    _input_options(p)
+    _segmenter_options(p)
+    p.set_defaults(run=cmd_calibrate)
+    return parser
+
+
+def _error(e: BaseException) -> None:
+    print(f"doodle: error: {e}", file=sys.stderr, flush=True)
+
+
+def _warning(message, category, filename, lineno, file=None, line=None) -> None:
+    print(f"doodle: warning: {message}", file=sys.stderr, flush=True)
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
+    warnings.showwarning = _warning
+    try:
+        return args.run(args)
+    except DoodleError as e:
+        _error(e)
+        return EXIT_BAD_INPUT
+    except KeyboardInterrupt:
+        print("doodle: interrupted", file=sys.stderr)
+        return 130
+    except BrokenPipeError:
+        return 0
+    except Exception as e:  # a bug, not bad input: one line unless debugging
+        if os.environ.get("DOODLE_DEBUG"):
+            raise
+        print(f"doodle: internal error: {type(e).__name__}: {e} (set DOODLE_DEBUG=1 for a traceback)", file=sys.stderr)
+        return 3
+
+
+if __name__ == "__main__":
+    sys.exit(main())
