@@ -48,13 +48,13 @@ def _params(args):
     return replace(params, **given), mounts
 
 
-def _load(path, args, mounts):
+def _load(path, args, mounts, raw=False):
     from doodle.csvimport import parse_column_map
     from doodle.loader import load
 
     columns = parse_column_map(args.columns) if args.columns else None
     tracks = [t.strip() for t in args.tracks.split(",") if t.strip()] if args.tracks else None
-    return load(path, args.convention, columns, tracks, mounts)
+    return load(path, args.convention, columns, tracks, mounts, raw)
 
 
 def cmd_tokens(args) -> int:
@@ -100,7 +100,8 @@ def cmd_tokens(args) -> int:
 def cmd_import(args) -> int:
     from doodle.fileformat import write_doodle
 
-    doodle = _load(args.file, args, None)
+    doodle = _load(args.file, args, None, raw=True)
+    Path(args.output).parent.mkdir(parents=True, exist_ok=True)
     write_doodle(args.output, doodle, convention="doodle")
     print(f"{args.output}: {len(doodle.tracks)} track(s), {len(doodle.t)} samples, {doodle.t[-1]:.2f} s")
     return 0
@@ -131,7 +132,7 @@ def cmd_calibrate(args) -> int:
 
     params, mounts = _params(args)
     if args.forward:
-        doodle = _load(args.forward, args, {})
+        doodle = _load(args.forward, args, None, raw=True)
         for tr in doodle.tracks:
             mounts[tr.name] = calibrate_mount(tr)
     gestures = [args.translation, args.rotation, args.slow]

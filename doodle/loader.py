@@ -17,11 +17,12 @@ from doodle.model import Doodle
 
 
 def load(path, convention: str | None = None, columns: dict | None = None,
-         tracks: list[str] | None = None, mounts: dict[str, tuple] | None = None) -> Doodle:
+         tracks: list[str] | None = None, mounts: dict[str, tuple] | None = None, raw: bool = False) -> Doodle:
     """Read ``path`` into our frame and keep ``tracks`` (all when None).
 
-    ``mounts`` (track → device-to-figurine quaternion) override the device profile's mount;
-    ``mounts=None`` keeps device orientations as read (for converting files).
+    Orientations become figurine orientations through the device profile's mount, or the
+    ``mounts`` given (track → device-to-figurine quaternion, from calibration); ``raw=True``
+    keeps device orientations as read (for converting files).
     """
     path = Path(path)
     if not path.exists():
@@ -39,7 +40,7 @@ def load(path, convention: str | None = None, columns: dict | None = None,
             raise DoodleError(f"{path}: --convention applies to CSV input; a doodle file's header names its own")
         doodle = read_doodle(path)
     doodle = doodle.select(tracks)
-    if mounts is None:
+    if raw:
         return doodle
     base = {tr.name: profile(doodle.device).mount for tr in doodle.tracks}
-    return mount_doodle(doodle, {**base, **mounts})
+    return mount_doodle(doodle, {**base, **(mounts or {})})

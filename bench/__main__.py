@@ -1,0 +1,17 @@
+"""Run every benchmark and print its figures beside a baseline measured in the same run."""
+
+import sys
+
+from bench import real_gestures, segmenter_speed
+
+
+def main() -> int:
+    print("Spatial motion doodles — benchmarks\n")
+    segmenter_speed.main()
+    print()
+    real_gestures.main()
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
