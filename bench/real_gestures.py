@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from doodle.csvimport import read_csv
-from doodle.segmenter import tokenize_doodle
+from doodle.segmenter import SegmenterParams, tokenize_doodle
 
 ROOT = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "vive-gestures"
 
@@ -69,20 +69,23 @@ def main() -> None:
     for path in files:
         doodle = read_csv(path, convention="unity")
         loaded += 1
-        tokens = tokenize_doodle(doodle)
+        c0 = doodle.select(["c0"])
+        names = [k.name for k in tokenize_doodle(c0)["c0"]]
         tokenised += 1
-        names = [k.name for k in tokens["c0"]]
         lengths.append(len(names))
+        savgol = [k.name for k in tokenize_doodle(c0, SegmenterParams(smoothing="savgol"))["c0"]]
         user, gesture = path.parts[-3], path.parts[-2]
-        data[user][gesture].append({"tokens": names, "path": direction_string(doodle.track("c0").p)})
+        data[user][gesture].append({"tokens": names, "savgol": savgol, "path": direction_string(doodle.track("c0").p)})
     print(f"Real Vive gestures ({ROOT})")
-    print(f"  files loaded: {loaded}/{len(files)}, tokenised: {tokenised}/{len(files)}; "
+    print(f"  files loaded: {loaded}/{len(files)}, c0 tokenised: {tokenised}/{len(files)}; "
           f"c0 tokens per recording: median {int(np.median(lengths))}, range {min(lengths)}–{max(lengths)}")
     acc, per_user, total, confusion = classify(data, "tokens")
     base, base_users, _, _ = classify(data, "path")
+    sg, _, _, _ = classify(data, "savgol")
     print(f"  nearest token string, c0, 3 templates per gesture per user: accuracy {acc:.3f} over {total} "
           f"examples (target ≥ 0.80)")
     print("    per user: " + ", ".join(f"{u} {a:.2f}" for u, a in per_user.items()))
+    print(f"  the same with Savitzky–Golay smoothing instead of Laplacian: accuracy {sg:.3f}")
     print(f"  baseline, 16-step world-direction string of the path: accuracy {base:.3f}; chance {1 / 11:.3f}")
     errors = sorted(((n, g, h) for (g, h), n in confusion.items() if g != h), reverse=True)[:5]
     if errors:

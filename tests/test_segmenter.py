@@ -206,6 +206,7 @@ def test_lost_tracking_at_the_ends_reads_as_still():
     track = performed(["T_Z"], seed=6)
     cut = lost_tracking(lost_tracking(track, 0.0, 0.3), track.t[-1] - 0.3, track.t[-1])
     assert names(tokenize(cut, 90.0)) == ["T_STILL", "T_Z", "T_STILL"]
+    assert stream(cut, 90.0) == tokenize(cut, 90.0)
 
 
 def test_long_lost_tracking_is_a_named_error():
