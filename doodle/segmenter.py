@@ -155,7 +155,7 @@ class Segmenter:
         self._smoother = StreamingSmoother(params.kernel(rate), 8)
         self._pushed = 0  # samples pushed
         self._last_t: float | None = None
-        self._raw_q: np.ndarray | None = None  # previous raw quaternion, as given
+        self._raw_q: tuple | None = None  # previous raw quaternion, as given
         self._sign = 1.0  # sign applied to it for continuity
         self._prev: tuple | None = None  # previous smoothed sample
         self._n = 0  # samples classified so far
