@@ -17,7 +17,8 @@ $(VENV)/.installed-test: pyproject.toml $(VENV)/.installed
 	touch $@
 
 demo: $(VENV)/.installed
-	$(BIN)/doodle tokens -v examples/demo.doodle
+	$(BIN)/doodle tokens examples/demo.doodle
+	$(BIN)/doodle recognize -v examples/demo.doodle
 
 test: $(VENV)/.installed-test
 	$(BIN)/python -m pytest

@@ -97,6 +97,70 @@ def cmd_tokens(args) -> int:
     return EXIT_BAD_INPUT if failed else 0
 
 
+def _library_options(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--library", metavar="DIR", help="a user library (folder with library.toml)")
+    p.add_argument("--no-builtin", action="store_true", help="use only the library given with --library")
+
+
+def cmd_recognize(args) -> int:
+    from doodle.pipeline import load_actions, recognize
+
+    params, mounts = _params(args)
+    compiled = load_actions(args.library, not args.no_builtin)
+    failed = 0
+    for path in args.files:
+        try:
+            doodle = _load(path, args, mounts)
+            result = recognize(doodle, compiled, params, args.threshold, args.direction_costs)
+        except DoodleError as e:
+            _error(e)
+            failed += 1
+            continue
+        t = doodle.t
+        last = len(t) - 1
+
+        def seconds(i: int) -> float:
+            return round(float(t[min(i, last)] - t[0]), 6)
+
+        if args.json:
+            segments = [
+                {"track": name, "action": s.action, "start": seconds(s.start), "end": seconds(s.end),
+                 "exact": s.exact, "distance": None if s.distance != s.distance else s.distance,
+                 "samples": [s.start, s.end], "tokens": [k.name for k in toks[s.first:s.stop]]}
+                for name, (toks, segs) in result.items() for s in segs
+            ]
+            print(json.dumps({"file": str(path), "segments": segments}), flush=True)
+            continue
+        print(f"{path}  ({doodle.t[-1]:.2f} s, {len(compiled.library.actions)} actions)")
+        for name, (toks, segs) in result.items():
+            print(f"  {name}: {', '.join(s.action for s in segs) or '(nothing)'}")
+            if args.verbose:
+                for s in segs:
+                    how = "exact" if s.exact else ("no match" if s.action == "unknown" else f"distance {s.distance:g}")
+                    print(f"    {seconds(s.start):8.3f} {seconds(s.end):8.3f}  {s.action:<16} {how:<12} "
+                          f"{' '.join(k.name for k in toks[s.first:s.stop])}")
+    return EXIT_BAD_INPUT if failed else 0
+
+
+def cmd_library(args) -> int:
+    from doodle.pipeline import load_actions
+    from grammar.library import overlaps
+
+    compiled = load_actions(args.library, not args.no_builtin)
+    lib = compiled.library
+    if args.library_command == "list":
+        for action, dfa in zip(lib.actions, compiled.dfas):
+            flags = ",".join(f for f in ("cyclic", "in_place", "jumping") if getattr(action, f)) or "-"
+            print(f"{action.name:<18} {flags:<16} {action.expression}")
+        return 0
+    found = overlaps(compiled)
+    print(f"{lib.source}: {len(lib.actions)} actions, all expressions compile; "
+          f"{len(found)} overlapping pair{'s' * (len(found) != 1)}")
+    for o in found:
+        print(f"  {o.first} ~ {o.second}: both accept {' '.join(o.witness)}")
+    return 0
+
+
 def cmd_import(args) -> int:
     from doodle.fileformat import write_doodle
 
@@ -160,6 +224,22 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("-v", "--verbose", action="store_true", help="also list each token's time range")
     _segmenter_options(p)
     p.set_defaults(run=cmd_tokens)
+
+    p = sub.add_parser("recognize", help="recognise actions in doodle or CSV files")
+    p.add_argument("files", nargs="+", metavar="FILE")
+    _input_options(p)
+    _library_options(p)
+    p.add_argument("--json", action="store_true", help="one JSON object per file per line")
+    p.add_argument("-v", "--verbose", action="store_true", help="list each segment with its time range and tokens")
+    p.add_argument("--threshold", type=float, default=2.0, help="edit-distance threshold of approximate matches (default 2)")
+    p.add_argument("--direction-costs", action="store_true", help="substitutions between near directions cost less")
+    _segmenter_options(p)
+    p.set_defaults(run=cmd_recognize)
+
+    p = sub.add_parser("library", help="inspect action libraries: list, check")
+    p.add_argument("library_command", choices=["list", "check"], metavar="list|check")
+    _library_options(p)
+    p.set_defaults(run=cmd_library)
 
     p = sub.add_parser("import", help="convert a CSV recording into a doodle file")
     p.add_argument("file", metavar="CSV")

@@ -50,7 +50,7 @@ def test_tokens_track_selection(two_tracks, capsys):
 def test_demo_reads_as_the_main_example(capsys):
     assert main(["tokens", str(DEMO)]) == 0
     out = capsys.readouterr().out
-    assert "c0: T_STILL T_X T_STILL R_N_Y T_STILL T_Z" in out
+    assert "c0: T_STILL T_X T_STILL T_Z T_STILL T_Y T_Y_Z T_N_Y_Z T_N_Y T_STILL T_Z T_STILL T_Y T_N_Y T_STILL" in out
 
 
 def test_csv_needs_a_convention_and_reads_the_vive_layout(vive_files, capsys):

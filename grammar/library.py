@@ -1,0 +1,62 @@
+"""Compile a library's actions to automata, check overlaps, and build the Matcher's tables."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from doodle.errors import DoodleError
+from grammar.automata import DFA, check_language, compile_expression, intersection_witness
+from grammar.expr import parse
+from grammar.matcher import Automaton
+from library.manifest import ActionDef, Library
+
+
+@dataclass(frozen=True, eq=False)
+class Compiled:
+    library: Library
+    dfas: tuple[DFA, ...]
+
+    def automaton(self, threshold: float = 2.0, direction_costs: bool = False) -> Automaton:
+        return Automaton(self.library.names, list(self.dfas), threshold, direction_costs)
+
+    def dfa(self, name: str) -> DFA:
+        return self.dfas[self.library.names.index(name)]
+
+    def action(self, name: str) -> ActionDef:
+        return self.library.action(name)
+
+
+def compile_action(action: ActionDef) -> DFA:
+    """The minimal DFA of one action; DoodleError naming the manifest, action and column."""
+    try:
+        dfa = compile_expression(parse(action.expression, action.name))
+        check_language(dfa, action.name)
+    except DoodleError as e:
+        raise DoodleError(f"{action.source}: {e}" if action.source else str(e)) from None
+    return dfa
+
+
+def compile_library(library: Library) -> Compiled:
+    return Compiled(library, tuple(compile_action(a) for a in library.actions))
+
+
+@dataclass(frozen=True)
+class Overlap:
+    first: str
+    second: str
+    witness: tuple[str, ...]  # a shortest compacted token string both accept
+
+
+def overlaps(compiled: Compiled, only: str | None = None) -> list[Overlap]:
+    """Every pair of actions whose languages intersect (or every action overlapping
+    ``only``), each with a shortest token string both accept (§4.2.4)."""
+    names, dfas = compiled.library.names, compiled.dfas
+    found = []
+    for i in range(len(names)):
+        for j in range(i + 1, len(names)):
+            if only is not None and only not in (names[i], names[j]):
+                continue
+            witness = intersection_witness(dfas[i], dfas[j])
+            if witness is not None:
+                found.append(Overlap(names[i], names[j], tuple(witness)))
+    return found
