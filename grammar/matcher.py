@@ -10,19 +10,26 @@ operations, whatever the number of actions.
 
 Policy (Algorithm 1 with SPEC's refinements):
 
-* a *match* is an action whose accepting states are within the threshold (default 2) after
-  some prefix of the tokens read, and — so that one stray token is not "approximately" any
-  short action — within half the length of that prefix; an *exact* match has distance 0;
-* exact beats approximate; among exact matches the longest wins (so a cyclic action such as
-  Walk keeps absorbing tokens while it still matches); among approximate ones the smallest
-  distance, then the longest; when two actions match the same tokens equally well (their
-  languages overlap, §4.2.4), the more specific one wins — the one accepting fewer token
-  strings of that length (Stomp's ``T_Y T_N_Y`` over Jump's) — then the one listed first;
-* reading continues while an action could still extend an exact match (once an exact match
-  is known) or could still come within the threshold (before that);
-* then the best match is emitted and reading restarts from the first token it did not
-  consume; when nothing matched within the threshold, the first token becomes an explicit
-  ``unknown`` segment (consecutive unknowns are merged).
+* a *candidate* is an action whose accepting states are within the threshold (default 2)
+  after some prefix of the tokens read, and — so that one stray token is not
+  "approximately" any short action — within half the length of that prefix; an *exact*
+  candidate has distance 0;
+* exact beats approximate; among exact candidates the longest wins (so a cyclic action such
+  as Walk keeps absorbing tokens while it still matches); among approximate ones the
+  smallest distance, then the longest; when two actions match the same tokens equally well
+  because their languages overlap (§4.2.4), the more specific one wins — the one accepting
+  fewer token strings of that length (Stomp's ``T_Y T_N_Y`` over Jump's) — then the one
+  listed first;
+* reading continues while some action could still extend an exact candidate (once one is
+  known) or could still come within the threshold (before that); then the best candidate is
+  emitted and reading restarts from the first token it did not consume; when there is no
+  candidate, the first token becomes an explicit ``unknown`` segment (consecutive unknowns
+  are merged).
+
+A known weakness of this greedy policy (kept because it is the thesis's and SPEC's): a
+noisy gesture whose first token is on its own an exact action (``T_N_Z`` is Walk Back) is
+split there rather than matched approximately as a whole; a segmentation-level dynamic
+programme would fix that.
 
 Substitution costs are 1 (Levenshtein) or, with ``direction_costs=True``, depend on how far
 apart two directions are: ``0.5 + 0.5·angle/π`` between tokens of the same kind, 1 otherwise
@@ -161,8 +168,7 @@ class Matcher:
 
     def _reset(self) -> None:
         self._d = self.auto.initial
-        self._exact: tuple | None = None  # (length, action)
-        self._approx: tuple | None = None  # (distance, -length, action)
+        self._best: tuple | None = None  # (length, action, distance) of the best candidate
 
     def push(self, token: Token) -> list[Segment]:
         self._queue.append((self._next, token))
@@ -194,25 +200,23 @@ class Matcher:
         self._d = self.auto.step(self._d, CODES[token.name])
         costs = self.auto.accept_costs(self._d)
         length = len(self._buf)
-        low = costs.min()
-        if low == 0.0 or (self._exact is None and low <= min(self.auto.threshold, length / 2)):
-            best = self.auto.most_specific(np.flatnonzero(costs == low), length)
-            if low == 0.0:
-                self._exact = (length, best)
-            elif self._approx is None or (float(low), -length) < self._approx[:2]:
-                self._approx = (float(low), -length, best)
+        low = float(costs.min())
+        best = self._best
+        if low == 0.0:
+            pass  # exact: the longest so far
+        elif (best is not None and best[2] <= low) or low > min(self.auto.threshold, length / 2):
+            return  # approximate and no better than what we have (or none at all)
+        action = self.auto.most_specific(np.flatnonzero(costs == low), length)
+        self._best = (length, action, low)
 
     def _alive(self) -> bool:
-        if self._exact is not None:
+        if self._best is not None and self._best[2] == 0.0:
             return bool((self._d == 0.0).any())
         return bool(self._d.min() <= self.auto.threshold)
 
     def _emit(self, out: list[Segment]) -> None:
-        if self._exact is not None:
-            (length, action), distance = self._exact, 0.0
-        elif self._approx is not None:
-            distance, length, action = self._approx
-            length = -length
+        if self._best is not None:
+            length, action, distance = self._best
         else:
             length, action, distance = 1, None, float("nan")
         used, rest = self._buf[:length], self._buf[length:]
