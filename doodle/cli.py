@@ -125,7 +125,7 @@ def cmd_recognize(args) -> int:
         if args.json:
             segments = [
                 {"track": name, "action": s.action, "start": seconds(s.start), "end": seconds(s.end),
-                 "exact": s.exact, "distance": None if s.distance != s.distance else s.distance,
+                 "exact": s.exact, "distance": s.distance,
                  "samples": [s.start, s.end], "tokens": [k.name for k in toks[s.first:s.stop]]}
                 for name, (toks, segs) in result.items() for s in segs
             ]

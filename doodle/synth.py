@@ -535,3 +535,14 @@ def resample(track: Track | Doodle, rate: float, seed: int | None = None, jitter
         raise ValueError(f"resample: track {track.name} is empty")
     tn = _resample_times(float(track.t[0]), float(track.t[-1]), rate, seed, jitter)
     return _resample_track(track, tn)
+
+
+def perform(tokens: Sequence[str], rate: float = 90.0, seed: int = 0, name: str = "c0",
+            stroke_s: float = 0.3, pause_s: float = 0.4, **kw) -> Track:
+    """A track performing a token string: one brisk stroke per token (``T_STILL`` a pause).
+
+    Brisk strokes (0.3 s, 0.1 m or 1.2 rad) slow down only for a few samples where they
+    join, so the Segmenter reads the string back without stillness in between.
+    """
+    strokes = [stroke(tok, pause_s if tok in ("T_STILL", "STILL", "S") else stroke_s) for tok in tokens]
+    return synth_track(strokes, rate=rate, seed=seed, name=name, **kw)[0]

@@ -17,7 +17,8 @@ class Compiled:
     dfas: tuple[DFA, ...]
 
     def automaton(self, threshold: float = 2.0, direction_costs: bool = False) -> Automaton:
-        return Automaton(self.library.names, list(self.dfas), threshold, direction_costs)
+        return Automaton(self.library.names, list(self.dfas), threshold, direction_costs,
+                         [a.cyclic for a in self.library.actions])
 
     def dfa(self, name: str) -> DFA:
         return self.dfas[self.library.names.index(name)]

@@ -8,28 +8,34 @@ transition without reading). That is the distance to the whole regular language 
 enumerated. All actions' DFAs are stacked into one array so one token costs a few numpy
 operations, whatever the number of actions.
 
-Policy (Algorithm 1 with SPEC's refinements):
+Segmentation. Algorithm 1 reads greedily and lets an exact match beat any approximate one.
+On the thesis's table that fails badly: single-token actions (Walk ``T_Z``, Walk Back
+``T_N_Z``, Side Walk ``T_X``, Idle ``T_STILL``) match exactly at the start of most noisy
+gestures, so a Punch with one stray token became "Walk Back" plus debris — about 70 % of
+strings one or two edits from an action were split that way (measured, see tests). Here
+the Matcher chooses the *segmentation* of the token stream with the lowest cost, by dynamic
+programming over token positions:
 
-* a *candidate* is an action whose accepting states are within the threshold (default 2)
-  after some prefix of the tokens read, and — so that one stray token is not
-  "approximately" any short action — within half the length of that prefix; an *exact*
-  candidate has distance 0;
-* exact beats approximate; among exact candidates the longest wins (so a cyclic action such
-  as Walk keeps absorbing tokens while it still matches); among approximate ones the
-  smallest distance, then the longest; when two actions match the same tokens equally well
-  because their languages overlap (§4.2.4), the more specific one wins — the one accepting
-  fewer token strings of that length (Stomp's ``T_Y T_N_Y`` over Jump's) — then the one
-  listed first;
-* reading continues while some action could still extend an exact candidate (once one is
-  known) or could still come within the threshold (before that); then the best candidate is
-  emitted and reading restarts from the first token it did not consume; when there is no
-  candidate, the first token becomes an explicit ``unknown`` segment (consecutive unknowns
-  are merged).
+* a segment is an action whose language is within the threshold (default 2) of the tokens
+  it covers, and — so a stray token or two are not "approximately" any short action — under
+  half their number (more than half must match); it costs ``1 + 0.75·distance``;
+* a token left unexplained costs 1.5 (an ``unknown`` segment; neighbours are merged);
+* ties go to the smaller total distance; between actions matching the same tokens equally
+  well because their languages overlap (§4.2.4), the more specific one wins — the one
+  accepting fewer token strings of that length (Stomp's ``T_Y T_N_Y`` over Jump's) — then
+  the one listed first;
+* a pause is never noise: an input ``T_STILL`` can only be matched by ``T_STILL``.
 
-A known weakness of this greedy policy (kept because it is the thesis's and SPEC's): a
-noisy gesture whose first token is on its own an exact action (``T_N_Z`` is Walk Back) is
-split there rather than matched approximately as a whole; a segmentation-level dynamic
-programme would fix that.
+Fewer segments at equal exactness means longer matches, so a cyclic action such as Walk
+keeps absorbing tokens while it matches — and across a stray token (``T_Z T_X_Z T_Y T_Z``
+is one Walk at distance 1, Algorithm 1's cyclic rule) — and an exact segmentation beats an
+approximate one unless it needs more segments than the edits it saves.
+
+Streaming. Every token position that may start a segment keeps a row of edit costs (one
+per state of every action); a row dies when no action is within the threshold, so only a
+short window is alive. A segment is returned as soon as every segmentation that can still
+be extended agrees on it — typically one or two tokens after it ends. ``match`` (batch) is
+the same code run to the end of the stream.
 
 Substitution costs are 1 (Levenshtein) or, with ``direction_costs=True``, depend on how far
 apart two directions are: ``0.5 + 0.5·angle/π`` between tokens of the same kind, 1 otherwise
@@ -48,6 +54,8 @@ from grammar.automata import DFA
 
 UNKNOWN = "unknown"
 INF = 1e9
+EDIT_WEIGHT = 0.75  # cost of one edit, relative to one more segment
+UNKNOWN_COST = 1.5  # cost of leaving one token unexplained (more than a one-token segment)
 MAX_COUNTED = 64  # string lengths up to which languages are counted for specificity
 
 
@@ -74,7 +82,7 @@ class Segment:
     start: int
     end: int
     exact: bool
-    distance: float
+    distance: float | None  # None for an unknown segment
 
 
 def substitution_costs(direction_costs: bool = False) -> np.ndarray:
@@ -98,14 +106,17 @@ def substitution_costs(direction_costs: bool = False) -> np.ndarray:
 class Automaton:
     """The DFAs of a list of actions stacked for vectorised edit-distance steps."""
 
-    def __init__(self, names: list[str], dfas: list[DFA], threshold: float = 2.0, direction_costs: bool = False):
+    def __init__(self, names: list[str], dfas: list[DFA], threshold: float = 2.0, direction_costs: bool = False,
+                 cyclic: list[bool] | None = None, protect_still: bool = True):
         if not names:
             raise ValueError("no actions to match")
         self.names, self.threshold = list(names), float(threshold)
+        self.cyclic = list(cyclic) if cyclic is not None else [False] * len(names)
         sizes = [d.size for d in dfas]
         offsets = np.concatenate([[0], np.cumsum(sizes)])
         self.n = int(offsets[-1])
         self.act_offsets = offsets[:-1]
+        self.sizes = sizes
         self.starts = offsets[:-1].copy()
         self.accept = np.concatenate([d.accept for d in dfas])
         src, sym, dst = [], [], []
@@ -123,7 +134,11 @@ class Automaton:
         order = np.argsort(r_dst, kind="stable")
         self.read_src = r_src[order]
         self.read_off = np.searchsorted(r_dst[order], states)
-        self.read_cost = np.concatenate([costs[:, sym], np.ones((N_CODES, self.n))], axis=1)[:, order]
+        read_cost = np.concatenate([costs[:, sym], np.ones((N_CODES, self.n))], axis=1)
+        if protect_still:  # a pause is never noise: T_STILL read must be matched by T_STILL
+            still = CODES["T_STILL"]
+            read_cost[still] = np.where(np.concatenate([sym == still, np.zeros(self.n, bool)]), 0.0, INF)
+        self.read_cost = read_cost[:, order]
         # insertion step: stay (0) or follow an edge without reading (1)
         i_src = np.concatenate([states, src])
         i_dst = np.concatenate([states, dst])
@@ -143,97 +158,106 @@ class Automaton:
 
     def _insert(self, d: np.ndarray) -> np.ndarray:
         for _ in range(self.ins_rounds):
-            d = np.minimum.reduceat(d[self.ins_src] + self.ins_cost, self.ins_off)
+            d = np.minimum.reduceat(d[..., self.ins_src] + self.ins_cost, self.ins_off, axis=-1)
         return np.minimum(d, self.cap)
 
     def step(self, d: np.ndarray, code: int) -> np.ndarray:
-        """Costs per state after reading one more token."""
-        return self._insert(np.minimum.reduceat(d[self.read_src] + self.read_cost[code], self.read_off))
+        """Costs per state (last axis; any leading axes) after reading one more token."""
+        return self._insert(np.minimum.reduceat(d[..., self.read_src] + self.read_cost[code], self.read_off, axis=-1))
 
     def accept_costs(self, d: np.ndarray) -> np.ndarray:
         """Per action, the smallest cost of an accepting state."""
-        return np.minimum.reduceat(np.where(self.accept, d, INF), self.act_offsets)
+        return np.minimum.reduceat(np.where(self.accept, d, INF), self.act_offsets, axis=-1)
 
 
 class Matcher:
-    """Streaming Matcher for one track: ``push`` a token, get the segments it completes."""
+    """Streaming Matcher for one track: ``push`` a token, get the segments that became final.
 
-    def __init__(self, automaton: Automaton, track: str = "c0"):
+    Every token position that is the start of a possible segment keeps a row of edit costs
+    (one per state of every action); rows die when no action is within the threshold. The
+    best segmentation of the tokens up to each position is kept with a back pointer; a
+    segment is final — and returned — once every segmentation that can still be extended
+    agrees on it.
+    """
+
+    def __init__(self, automaton: Automaton, track: str = "c0", edit_weight: float = EDIT_WEIGHT,
+                 unknown_cost: float = UNKNOWN_COST):
         self.auto, self.track = automaton, track
-        self._queue: deque = deque()  # tokens waiting to be read (re-read after an emit)
-        self._buf: list = []  # (index, Token) read since the segment start
-        self._next = 0  # index of the next pushed token
-        self._reset()
+        self.edit_weight, self.unknown_cost = edit_weight, unknown_cost
+        self._tokens: dict[int, Token] = {}
+        self._rows = np.empty((0, automaton.n))
+        self._starts = np.empty(0, dtype=np.int64)
+        self._best = {0: (0.0, 0.0)}  # position -> (cost, total distance) of the best segmentation
+        self._back: dict[int, tuple] = {}  # position -> (start, action or None, distance)
+        self._n = 0
+        self._done = 0  # segments before this position were returned
         self._unknown: Segment | None = None
 
-    def _reset(self) -> None:
-        self._d = self.auto.initial
-        self._best: tuple | None = None  # (length, action, distance) of the best candidate
-
     def push(self, token: Token) -> list[Segment]:
-        self._queue.append((self._next, token))
-        self._next += 1
-        return self._run(final=False)
+        e, auto = self._n, self.auto
+        self._tokens[e] = token
+        self._n += 1
+        rows = auto.step(np.vstack([self._rows, auto.initial]), CODES[token.name])
+        starts = np.append(self._starts, e)
+        alive = rows.min(axis=1) <= auto.threshold
+        self._rows, self._starts = rows[alive], starts[alive]
+        cost, dist = self._best[e]
+        best, back = (cost + self.unknown_cost, dist), (e, None, None)
+        accept = auto.accept_costs(rows)
+        for row, s in zip(accept, starts.tolist()):
+            length = e + 1 - s
+            low = float(row.min())
+            if not (low == 0.0 or (low <= auto.threshold and low < length / 2)):
+                continue
+            c, d = self._best[s]
+            option = (c + 1.0 + self.edit_weight * low, d + low)
+            if option < best:
+                best, back = option, (s, auto.most_specific(np.flatnonzero(row == low), length), low)
+        self._best[e + 1], self._back[e + 1] = best, back
+        frontier = set(self._starts.tolist()) | {e + 1}
+        return self._emit_until(self._settled(frontier))
 
     def close(self) -> list[Segment]:
-        out = self._run(final=True)
+        out = self._emit_until(self._n)
         if self._unknown is not None:
             out.append(self._unknown)
             self._unknown = None
+        self._rows, self._starts = np.empty((0, self.auto.n)), np.empty(0, dtype=np.int64)
         return out
 
-    def _run(self, final: bool) -> list[Segment]:
+    def _settled(self, frontier: set) -> int:
+        """The latest position every best segmentation of the frontier positions passes."""
+        positions = set(frontier)
+        while len(positions) > 1:
+            p = max(positions)
+            positions.discard(p)
+            positions.add(self._back[p][0])
+        return positions.pop()
+
+    def _emit_until(self, stop: int) -> list[Segment]:
+        path, p = [], stop
+        while p > self._done:
+            s, action, distance = self._back[p]
+            path.append((s, p, action, distance))
+            p = s
         out: list[Segment] = []
-        while True:
-            while self._queue:
-                item = self._queue.popleft()
-                self._read(item)
-                if not self._alive():
-                    self._emit(out)
-            if not final or not self._buf:
-                return out
-            self._emit(out)
-
-    def _read(self, item) -> None:
-        _, token = item
-        self._buf.append(item)
-        self._d = self.auto.step(self._d, CODES[token.name])
-        costs = self.auto.accept_costs(self._d)
-        length = len(self._buf)
-        low = float(costs.min())
-        best = self._best
-        if low == 0.0:
-            pass  # exact: the longest so far
-        elif (best is not None and best[2] <= low) or low > min(self.auto.threshold, length / 2):
-            return  # approximate and no better than what we have (or none at all)
-        action = self.auto.most_specific(np.flatnonzero(costs == low), length)
-        self._best = (length, action, low)
-
-    def _alive(self) -> bool:
-        if self._best is not None and self._best[2] == 0.0:
-            return bool((self._d == 0.0).any())
-        return bool(self._d.min() <= self.auto.threshold)
-
-    def _emit(self, out: list[Segment]) -> None:
-        if self._best is not None:
-            length, action, distance = self._best
-        else:
-            length, action, distance = 1, None, float("nan")
-        used, rest = self._buf[:length], self._buf[length:]
-        (first, t0), (last, t1) = used[0], used[-1]
-        name = UNKNOWN if action is None else self.auto.names[action]
-        seg = Segment(name, first, last + 1, t0.start, t1.end, distance == 0.0, distance)
-        if name == UNKNOWN:
-            prev = self._unknown
-            self._unknown = seg if prev is None else Segment(UNKNOWN, prev.first, seg.stop, prev.start, seg.end, False, float("nan"))
-        else:
+        for s, p, action, distance in reversed(path):
+            t0, t1 = self._tokens[s], self._tokens[p - 1]
+            if action is None:
+                prev = self._unknown
+                self._unknown = Segment(UNKNOWN, s if prev is None else prev.first, p,
+                                        t0.start if prev is None else prev.start, t1.end, False, None)
+                continue
             if self._unknown is not None:
                 out.append(self._unknown)
                 self._unknown = None
-            out.append(seg)
-        self._buf = []
-        self._queue.extendleft(reversed(rest))
-        self._reset()
+            out.append(Segment(self.auto.names[action], s, p, t0.start, t1.end, distance == 0.0, distance))
+        for q in range(self._done, stop):  # forget what is final
+            self._tokens.pop(q, None)
+            self._best.pop(q, None)
+            self._back.pop(q, None)
+        self._done = max(self._done, stop)
+        return out
 
 
 def match(tokens: list[Token], automaton: Automaton, track: str = "c0") -> list[Segment]:
