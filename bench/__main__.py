@@ -2,7 +2,7 @@
 
 import sys
 
-from bench import real_gestures, segmenter_speed
+from bench import matcher_speed, real_gestures, segmenter_speed
 
 
 def main() -> int:
@@ -10,6 +10,8 @@ def main() -> int:
     segmenter_speed.main()
     print()
     real_gestures.main()
+    print()
+    matcher_speed.main()
     return 0
 
 

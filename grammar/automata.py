@@ -178,24 +178,26 @@ def intersection_witness(a: DFA, b: DFA) -> list[str] | None:
     """A shortest non-empty token string both DFAs accept, or None (breadth-first search
     over the product automaton)."""
     start = (0, 0)
-    parent = {start: None}
+    parent: dict = {start: None}
+
+    def path_to(state) -> list[str]:
+        out = []
+        while parent[state] is not None:
+            state, code = parent[state]
+            out.append(NAMES[code])
+        return out[::-1]
+
     todo = deque([start])
     while todo:
         s = todo.popleft()
         ra, rb = a.table[s[0]], b.table[s[1]]
-        both = np.flatnonzero((ra >= 0) & (rb >= 0))
-        for code in both:
+        for code in np.flatnonzero((ra >= 0) & (rb >= 0)):
             t = (int(ra[code]), int(rb[code]))
-            if t in parent:
-                continue
-            parent[t] = (s, int(code))
-            if a.accept[t[0]] and b.accept[t[1]]:
-                path = []
-                while parent[t] is not None:
-                    t, code = parent[t]
-                    path.append(NAMES[code])
-                return path[::-1]
-            todo.append(t)
+            if a.accept[t[0]] and b.accept[t[1]]:  # also when t is the start again
+                return path_to(s) + [NAMES[int(code)]]
+            if t not in parent:
+                parent[t] = (s, int(code))
+                todo.append(t)
     return None
 
 

@@ -59,6 +59,21 @@ UNKNOWN_COST = 1.5  # cost of leaving one token unexplained (more than a one-tok
 MAX_COUNTED = 64  # string lengths up to which languages are counted for specificity
 
 
+def _insertion_closure(dfa: DFA, cap: float) -> np.ndarray:
+    """``R[p, r]``: fewest transitions from state p to r (0 on the diagonal), capped."""
+    q = dfa.size
+    reach = np.full((q, q), cap)
+    np.fill_diagonal(reach, 0.0)
+    frontier = np.eye(q, dtype=bool)
+    adjacent = np.zeros((q, q), dtype=bool)
+    p, a = np.nonzero(dfa.table >= 0)
+    adjacent[p, dfa.table[p, a]] = True
+    for k in range(1, int(cap)):
+        frontier = (frontier.astype(int) @ adjacent.astype(int)) > 0
+        reach = np.where(frontier & (reach > k), float(k), reach)
+    return reach
+
+
 def _string_counts(dfa: DFA, longest: int) -> np.ndarray:
     """Number of accepted strings of each length 0..longest (as floats: they grow fast)."""
     ways = np.zeros(dfa.size)
@@ -119,36 +134,45 @@ class Automaton:
         self.sizes = sizes
         self.starts = offsets[:-1].copy()
         self.accept = np.concatenate([d.accept for d in dfas])
-        src, sym, dst = [], [], []
-        for off, d in zip(offsets, dfas):
-            s, a = np.nonzero(d.table >= 0)
-            src.append(s + off)
-            sym.append(a)
-            dst.append(d.table[s, a] + off)
-        src, sym, dst = np.concatenate(src), np.concatenate(sym), np.concatenate(dst)
-        costs = substitution_costs(direction_costs)
-        states = np.arange(self.n)
-        # read step: along an edge (match / substitute) or stay (delete the token), by target
-        r_src = np.concatenate([src, states])
-        r_dst = np.concatenate([dst, states])
-        order = np.argsort(r_dst, kind="stable")
-        self.read_src = r_src[order]
-        self.read_off = np.searchsorted(r_dst[order], states)
-        read_cost = np.concatenate([costs[:, sym], np.ones((N_CODES, self.n))], axis=1)
-        if protect_still:  # a pause is never noise: T_STILL read must be matched by T_STILL
-            still = CODES["T_STILL"]
-            read_cost[still] = np.where(np.concatenate([sym == still, np.zeros(self.n, bool)]), 0.0, INF)
-        self.read_cost = read_cost[:, order]
-        # insertion step: stay (0) or follow an edge without reading (1)
-        i_src = np.concatenate([states, src])
-        i_dst = np.concatenate([states, dst])
-        order = np.argsort(i_dst, kind="stable")
-        self.ins_src = i_src[order]
-        self.ins_off = np.searchsorted(i_dst[order], states)
-        self.ins_cost = np.concatenate([np.zeros(self.n), np.ones(len(src))])[order]
-        self.ins_rounds = int(np.floor(self.threshold))
         self.cap = self.threshold + 1.0
-        self.initial = self._insert(np.where(np.isin(states, self.starts), 0.0, self.cap))
+        costs = substitution_costs(direction_costs)
+        delete = np.ones(N_CODES)
+        if protect_still:  # a pause is never noise: a T_STILL read must be matched by T_STILL
+            still = CODES["T_STILL"]
+            costs[still, np.arange(N_CODES) != still] = INF
+            delete[still] = INF
+        # Per token x, one step = read x (match, substitute along an edge, or delete in
+        # place) then insert up to `threshold` tokens (follow edges without reading): the
+        # two composed once here, per action block, as min-plus products.
+        blocks, initial = [], []
+        for off, d in zip(offsets, dfas):
+            q = d.size
+            reach = _insertion_closure(d, self.cap)  # (q, q) fewest insertions from p to r
+            read = np.full((N_CODES, q, q), INF)
+            p_idx, a_idx = np.nonzero(d.table >= 0)
+            for p, a in zip(p_idx, a_idx):
+                t = d.table[p, a]
+                read[:, p, t] = np.minimum(read[:, p, t], costs[:, a])
+            diag = np.arange(q)
+            read[:, diag, diag] = np.minimum(read[:, diag, diag], delete[:, None])
+            both = np.min(read[:, :, :, None] + reach[None, None, :, :], axis=2)  # (x, p, r)
+            blocks.append((off, both))
+            initial.append(np.minimum(reach[0], self.cap))
+        self.initial = np.concatenate(initial)
+        self.step_src, self.step_off, self.step_cost = [], [], []
+        states = np.arange(self.n)
+        for x in range(N_CODES):
+            src, dst, cost = [states], [states], [np.full(self.n, self.cap)]  # every state gets an entry
+            for off, both in blocks:
+                p, r = np.nonzero(both[x] <= self.threshold)
+                src.append(p + off)
+                dst.append(r + off)
+                cost.append(both[x][p, r])
+            src, dst, cost = np.concatenate(src), np.concatenate(dst), np.concatenate(cost)
+            order = np.argsort(dst, kind="stable")
+            self.step_src.append(src[order])
+            self.step_off.append(np.searchsorted(dst[order], states))
+            self.step_cost.append(cost[order])
         self.counts = np.array([_string_counts(d, MAX_COUNTED) for d in dfas])  # specificity
 
     def most_specific(self, candidates: np.ndarray, length: int) -> int:
@@ -156,14 +180,10 @@ class Automaton:
         counts = self.counts[candidates, min(length, MAX_COUNTED)]
         return int(candidates[int(np.argmin(counts))])
 
-    def _insert(self, d: np.ndarray) -> np.ndarray:
-        for _ in range(self.ins_rounds):
-            d = np.minimum.reduceat(d[..., self.ins_src] + self.ins_cost, self.ins_off, axis=-1)
-        return np.minimum(d, self.cap)
-
     def step(self, d: np.ndarray, code: int) -> np.ndarray:
         """Costs per state (last axis; any leading axes) after reading one more token."""
-        return self._insert(np.minimum.reduceat(d[..., self.read_src] + self.read_cost[code], self.read_off, axis=-1))
+        out = np.minimum.reduceat(d[..., self.step_src[code]] + self.step_cost[code], self.step_off[code], axis=-1)
+        return np.minimum(out, self.cap, out=out)
 
     def accept_costs(self, d: np.ndarray) -> np.ndarray:
         """Per action, the smallest cost of an accepting state."""

@@ -1,0 +1,101 @@
+"""Matcher speed with the 28 built-in actions, and the overlap check of the whole table.
+
+* Streaming Matcher: cost per token over one hour of tokens (action strings sampled from
+  the table, separated by pauses, one token in ten edited), beside a naive baseline in the
+  same run: Python's ``re`` re-run over the whole current prefix, for every action, at
+  every token (exact matching only — it does less than the Matcher).
+* Overlap check (§4.2.4) of the whole table by product automata, beside a brute-force
+  baseline: every compacted string of up to 4 tokens over the table's tokens tested with
+  ``re`` against every pair.
+"""
+
+import itertools
+import re
+import time
+
+import numpy as np
+
+from doodle.pipeline import load_actions
+from doodle.tokens import CODES, Token
+from grammar.automata import sample
+from grammar.library import compile_library, overlaps
+from grammar.matcher import Matcher
+from library.manifest import builtin
+
+TOKENS_PER_SECOND = 3.0  # a brisk doodle: a token every ~0.3 s
+
+
+def hour_of_tokens(compiled, rng):
+    names, out = compiled.library.names, []
+    alphabet = sorted(CODES)
+    while len(out) < 3600 * TOKENS_PER_SECOND:
+        words = sample(compiled.dfas[int(rng.integers(len(names)))], rng)
+        words = [alphabet[int(rng.integers(len(alphabet)))] if rng.random() < 0.1 else w for w in words]
+        out += words + ["T_STILL"]
+    out = [w for i, w in enumerate(out) if i == 0 or w != out[i - 1]]
+    return [Token(w, 30 * i, 30 * i + 30) for i, w in enumerate(out)]
+
+
+def regex_of(expression):
+    letter = {name: chr(0x100 + code) for name, code in CODES.items()}
+    return re.compile(re.sub(r"[A-Z][A-Z_]*", lambda m: letter[m.group()], expression).replace(" ", ""))
+
+
+def main() -> None:
+    start = time.perf_counter()
+    compiled = load_actions()
+    compile_s = time.perf_counter() - start
+    auto = compiled.automaton()
+    tokens = hour_of_tokens(compiled, np.random.default_rng(0))
+    print(f"Matcher ({len(compiled.library.names)} actions, {auto.n} DFA states; library compiled in {compile_s:.2f} s)")
+
+    matcher, costs, segments = Matcher(auto), np.empty(len(tokens)), []
+    clock = time.perf_counter
+    for i, tok in enumerate(tokens):
+        t0 = clock()
+        segments += matcher.push(tok)
+        costs[i] = clock() - t0
+    segments += matcher.close()
+    us = costs * 1e6
+    print(f"  one hour of tokens: {len(tokens):,} tokens → {len(segments):,} segments in {costs.sum():.2f} s")
+    print(f"  streaming Matcher per token: mean {us.mean():6.1f} µs   p50 {np.percentile(us, 50):6.1f} µs   "
+          f"p99 {np.percentile(us, 99):6.1f} µs   (target: mean ≤ 30 µs)")
+
+    # naive baseline: re over the whole current prefix, every action, every token
+    letter = {name: chr(0x100 + code) for name, code in CODES.items()}
+    patterns = [regex_of(a.expression) for a in compiled.library.actions]
+    bounds = {s.first for s in segments}
+    base = np.empty(len(tokens))
+    prefix = ""
+    for i, tok in enumerate(tokens):
+        t0 = clock()
+        if i in bounds:
+            prefix = ""
+        prefix += letter[tok.name]
+        for p in patterns:
+            p.fullmatch(prefix)
+        base[i] = clock() - t0
+    ub = base * 1e6
+    print(f"  baseline, re over the prefix:  mean {ub.mean():6.1f} µs   p50 {np.percentile(ub, 50):6.1f} µs   "
+          f"p99 {np.percentile(ub, 99):6.1f} µs   (exact matching only)")
+
+    lib = builtin()
+    t0 = clock()
+    found = overlaps(compile_library(lib))
+    overlap_s = clock() - t0
+    pairs = len(lib.actions) * (len(lib.actions) - 1) // 2
+    print(f"  overlap check of the whole table (compile + {pairs} product automata): {overlap_s:.2f} s, "
+          f"{len(found)} overlapping pairs (target ≤ 2 s)")
+    used = sorted({w for a in lib.actions for w in re.findall(r"[A-Z][A-Z_]*", a.expression)})
+    t0 = clock()
+    strings = ["".join(letter[w] for w in s) for n in range(1, 5) for s in itertools.product(used, repeat=n)
+               if all(a != b for a, b in zip(s, s[1:]))]
+    accepted = [{s for s in strings if p.fullmatch(s)} for p in patterns]
+    brute = sum(1 for i in range(len(patterns)) for j in range(i + 1, len(patterns)) if accepted[i] & accepted[j])
+    brute_s = clock() - t0
+    print(f"  baseline, brute force over {len(strings):,} strings of ≤ 4 tokens with re: {brute_s:.2f} s, "
+          f"{brute} overlapping pairs found (misses longer witnesses)")
+
+
+if __name__ == "__main__":
+    main()
