@@ -226,15 +226,16 @@ class Matcher:
         cost, dist = self._best[e]
         best, back = (cost + self.unknown_cost, dist), (e, None, None)
         accept = auto.accept_costs(rows)
-        for row, s in zip(accept, starts.tolist()):
-            length = e + 1 - s
-            low = float(row.min())
-            if not (low == 0.0 or (low <= auto.threshold and low < length / 2)):
-                continue
+        low = accept.min(axis=1)
+        lengths = e + 1 - starts
+        eligible = (low == 0.0) | ((low <= auto.threshold) & (low < lengths / 2))
+        for k in np.flatnonzero(eligible).tolist():
+            s, d_k = int(starts[k]), float(low[k])
             c, d = self._best[s]
-            option = (c + 1.0 + self.edit_weight * low, d + low)
+            option = (c + 1.0 + self.edit_weight * d_k, d + d_k)
             if option < best:
-                best, back = option, (s, auto.most_specific(np.flatnonzero(row == low), length), low)
+                action = auto.most_specific(np.flatnonzero(accept[k] == d_k), int(lengths[k]))
+                best, back = option, (s, action, d_k)
         self._best[e + 1], self._back[e + 1] = best, back
         frontier = set(self._starts.tolist()) | {e + 1}
         return self._emit_until(self._settled(frontier))
