@@ -2,7 +2,7 @@
 
 import sys
 
-from bench import matcher_speed, real_gestures, segmenter_speed
+from bench import bvh_speed, matcher_speed, real_gestures, segmenter_speed
 
 
 def main() -> int:
@@ -12,6 +12,8 @@ def main() -> int:
     real_gestures.main()
     print()
     matcher_speed.main()
+    print()
+    bvh_speed.main()
     return 0
 
 

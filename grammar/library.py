@@ -38,7 +38,18 @@ def compile_action(action: ActionDef) -> DFA:
 
 
 def compile_library(library: Library) -> Compiled:
-    return Compiled(library, tuple(compile_action(a) for a in library.actions))
+    """Automata of the library's recognisable actions (those with an expression); an
+    interaction naming an unknown action is an error."""
+    names = set(library.names)
+    for inter in library.interactions:
+        for a in inter.actions:
+            if a not in names:
+                raise DoodleError(f"{library.source}: interaction {inter.name!r}: no action {a!r} in the library")
+    recognisable = Library(library.name, tuple(a for a in library.actions if a.expression.strip()), library.source,
+                           library.roles, library.interactions)
+    if not recognisable.actions:
+        raise DoodleError(f"{library.source}: no action has an expression to recognise")
+    return Compiled(recognisable, tuple(compile_action(a) for a in recognisable.actions))
 
 
 @dataclass(frozen=True)

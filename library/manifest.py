@@ -13,16 +13,35 @@ A library is a folder holding ``library.toml``::
     in_place = true                  # does not travel
     jumping = false                  # leaves the ground
     note = "free text"               # optional
+    clips = ["clips/wave.bvh"]       # optional: BVH files, relative to the library folder
+    stages = [4, 9, 20, 26]          # optional: frames ending preparation, anticipation,
+                                     #   execution and follow-through (else extracted)
+    cycle_length = 1.3               # optional, cyclic clips: metres travelled per cycle
+
+    [skeleton]                       # optional: joints playing each role in the clips
+    pelvis = "Hips"
+    chest = "Spine2"
+    head = "Head"
+    left_foot = "LeftFoot"
+    right_foot = "RightFoot"
+    left_hand = "LeftHand"
+    right_hand = "RightHand"
+
+    [[interactions]]                 # optional: actions performed together (§6.2)
+    name = "Slap"
+    actions = ["Slap", "Slapped"]    # one per character, each an action of the library
 
 Errors name the file, the action and the field. A user library extends the built-in one
-and overrides its actions of the same name (:func:`combine`). The expression's syntax is
-checked where it is compiled (:mod:`grammar.library`), with the action and column named.
+and overrides its actions of the same name (:func:`combine`); an overriding action without
+an expression keeps the one it overrides. The expression's syntax is checked where it is
+compiled (:mod:`grammar.library`), and joint names where clips are loaded
+(:mod:`retarget.clips`), with the action and the column or field named.
 """
 
 from __future__ import annotations
 
 import tomllib
-from dataclasses import dataclass
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 from doodle.errors import DoodleError
@@ -30,7 +49,8 @@ from doodle.errors import DoodleError
 BUILTIN = Path(__file__).resolve().parent / "builtin"
 RESERVED = {"unknown"}
 FLAGS = ("cyclic", "in_place", "jumping")
-ACTION_KEYS = {"name", "expression", "note", "flags_note", *FLAGS}
+ACTION_KEYS = {"name", "expression", "note", "flags_note", "clips", "stages", "cycle_length", *FLAGS}
+ROLES = ("pelvis", "chest", "head", "left_foot", "right_foot", "left_hand", "right_hand")
 
 
 @dataclass(frozen=True)
@@ -42,6 +62,15 @@ class ActionDef:
     jumping: bool
     note: str = ""
     source: str = ""  # the manifest it came from
+    clips: tuple[str, ...] = ()  # absolute paths of BVH clips
+    stages: tuple[int, ...] | None = None  # frames ending the first four stages
+    cycle_length: float | None = None  # metres per cycle
+
+
+@dataclass(frozen=True)
+class Interaction:
+    name: str
+    actions: tuple[str, ...]
 
 
 @dataclass(frozen=True)
@@ -49,6 +78,8 @@ class Library:
     name: str
     actions: tuple[ActionDef, ...]
     source: str
+    roles: dict = field(default_factory=dict)  # role -> joint name
+    interactions: tuple[Interaction, ...] = ()
 
     @property
     def names(self) -> list[str]:
@@ -82,7 +113,7 @@ def load_library(location) -> Library:
         raise DoodleError(f"{path}: [library] needs a name")
     if head.get("format", 1) != 1:
         raise DoodleError(f"{path}: library format {head.get('format')!r} is not supported (this version reads 1)")
-    unknown = set(data) - {"library", "actions"}
+    unknown = set(data) - {"library", "actions", "skeleton", "interactions"}
     if unknown:
         raise DoodleError(f"{path}: unknown section {sorted(unknown)[0]!r}")
     entries = data.get("actions", [])
@@ -95,7 +126,29 @@ def load_library(location) -> Library:
         if name in seen:
             raise DoodleError(f"{path}: action {name!r} is defined twice")
         seen.add(name)
-    return Library(head["name"], tuple(actions), str(path))
+    roles = data.get("skeleton", {})
+    if not isinstance(roles, dict):
+        raise DoodleError(f"{path}: [skeleton] must be a table of role = joint name")
+    for role, joint in roles.items():
+        if role not in ROLES:
+            raise DoodleError(f"{path}: skeleton.{role}: unknown role (known: {', '.join(ROLES)})")
+        if not isinstance(joint, str) or not joint:
+            raise DoodleError(f"{path}: skeleton.{role}: expected a joint name, got {joint!r}")
+    interactions = tuple(_interaction(e, i, path, seen) for i, e in enumerate(data.get("interactions", []), 1))
+    return Library(head["name"], tuple(actions), str(path), dict(roles), interactions)
+
+
+def _interaction(entry, i: int, path: Path, names: set) -> Interaction:
+    if not isinstance(entry, dict) or not isinstance(entry.get("name"), str):
+        raise DoodleError(f"{path}: interaction #{i}: needs a name")
+    where = f"{path}: interaction {entry['name']!r}"
+    acts = entry.get("actions")
+    if not isinstance(acts, list) or len(acts) < 2 or not all(isinstance(a, str) for a in acts):
+        raise DoodleError(f"{where}: field 'actions' must list at least two action names")
+    extra = set(entry) - {"name", "actions", "note"}
+    if extra:
+        raise DoodleError(f"{where}: unknown field {sorted(extra)[0]!r}")
+    return Interaction(entry["name"], tuple(acts))
 
 
 def _action(entry, i: int, path: Path) -> ActionDef:
@@ -111,16 +164,31 @@ def _action(entry, i: int, path: Path) -> ActionDef:
     extra = set(entry) - ACTION_KEYS
     if extra:
         raise DoodleError(f"{where}: unknown field {sorted(extra)[0]!r}")
-    expression = entry.get("expression")
-    if not isinstance(expression, str) or not expression.strip():
-        raise DoodleError(f"{where}: field 'expression' must be a non-empty string")
+    expression = entry.get("expression", "")
+    if not isinstance(expression, str):
+        raise DoodleError(f"{where}: field 'expression' must be a string")
+    clips = entry.get("clips", [])
+    if not isinstance(clips, list) or not all(isinstance(c, str) and c for c in clips):
+        raise DoodleError(f"{where}: field 'clips' must be a list of BVH file paths")
+    resolved = tuple(str((path.parent / c).resolve()) for c in clips)
+    stages = entry.get("stages")
+    if stages is not None and (not isinstance(stages, list) or len(stages) != 4
+                               or not all(isinstance(s, int) and not isinstance(s, bool) and s >= 0 for s in stages)
+                               or stages != sorted(stages)):
+        raise DoodleError(f"{where}: field 'stages' must be four increasing frame numbers "
+                          f"(ends of preparation, anticipation, execution, follow-through)")
+    cycle = entry.get("cycle_length")
+    if cycle is not None and (not isinstance(cycle, (int, float)) or isinstance(cycle, bool) or not cycle > 0):
+        raise DoodleError(f"{where}: field 'cycle_length' must be a positive number of metres")
     flags = {}
     for flag in FLAGS:
         value = entry.get(flag, False)
         if not isinstance(value, bool):
             raise DoodleError(f"{where}: field {flag!r} must be true or false, not {value!r}")
         flags[flag] = value
-    return ActionDef(name, expression, note=str(entry.get("note", "")), source=str(path), **flags)
+    return ActionDef(name, expression, note=str(entry.get("note", "")), source=str(path), clips=resolved,
+                     stages=tuple(stages) if stages is not None else None,
+                     cycle_length=float(cycle) if cycle is not None else None, **flags)
 
 
 def builtin() -> Library:
@@ -136,5 +204,12 @@ def combine(base: Library | None, user: Library | None) -> Library:
             raise DoodleError("no library: give --library DIR or drop --no-builtin")
         return lib
     mine = {a.name: a for a in user.actions}
-    merged = [mine.pop(a.name, a) for a in base.actions] + [a for a in user.actions if a.name in mine]
-    return Library(f"{base.name}+{user.name}", tuple(merged), user.source)
+    merged = []
+    for a in base.actions:
+        over = mine.pop(a.name, None)
+        merged.append(a if over is None else (over if over.expression else replace(over, expression=a.expression)))
+    merged += [a for a in user.actions if a.name in mine]
+    roles = {**base.roles, **user.roles}
+    names = {i.name for i in user.interactions}
+    interactions = tuple(i for i in base.interactions if i.name not in names) + user.interactions
+    return Library(f"{base.name}+{user.name}", tuple(merged), user.source, roles, interactions)

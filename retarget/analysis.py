@@ -1,0 +1,222 @@
+"""Clip analysis: skeleton roles and partition, animation stages, cycles, foot contacts.
+
+* Roles (pelvis, chest, head, feet, hands) are guessed from joint names of the common
+  conventions (Mixamo ``LeftFoot``, Bandai ``Foot_L``, DeepMimic ``left_ankle``…); a library
+  manifest can name them instead.
+* Partition (§5.4.1): *spine* joints lie on the chains pelvis→chest and pelvis→head,
+  *primary* joints are the other children of spine joints (shoulders, hips), *secondary*
+  are the rest.
+* Stages (§5.3.2): a stage ends at an extreme pose, where speed and acceleration both reach
+  a local minimum while the speed is low. The thesis's threshold is
+  ``min_speed·(1 + p)``, p = 0.15; over a whole clip the minimum is usually the rest pose
+  at either end, so here "low" is measured on the clip's own range:
+  ``min + p·(max − min)`` of the smoothed body speed. Detected extreme poses are labelled
+  in the fixed order preparation, anticipation, execution, follow-through, transition
+  (Fig. 2.2); with only two, anticipation/execution vs execution/follow-through is decided
+  by whether the main direction of motion reverses between the two segments (§5.3.2).
+* Cycles: the period of a cyclic clip is the lag of greatest self-similarity of its
+  root-relative pose; its *cycle length* is the horizontal distance the root travels per
+  period.
+* Foot contacts: a foot joint is in contact while it is near its lowest height in the clip
+  and nearly still.
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.ndimage import gaussian_filter1d
+
+from retarget.skeleton import Motion, Skeleton, forward_kinematics
+
+ROLE_PATTERNS = {
+    "pelvis": [r"^(mixamorig:)?hips$", r"^pelvis$", r"^root$", r"^hip$"],
+    "chest": [r"^(mixamorig:)?spine2$", r"^chest$", r"^spine1$", r"^upperchest$", r"^spine$"],
+    "head": [r"^(mixamorig:)?head$", r"^neck$"],
+    "left_foot": [r"^(mixamorig:)?leftfoot$", r"^foot_l$", r"^left_ankle$", r"^l_?foot$", r"^lfoot$"],
+    "right_foot": [r"^(mixamorig:)?rightfoot$", r"^foot_r$", r"^right_ankle$", r"^r_?foot$", r"^rfoot$"],
+    "left_hand": [r"^(mixamorig:)?lefthand$", r"^hand_l$", r"^left_wrist$", r"^l_?hand$", r"^lhand$"],
+    "right_hand": [r"^(mixamorig:)?righthand$", r"^hand_r$", r"^right_wrist$", r"^r_?hand$", r"^rhand$"],
+}
+
+
+def guess_roles(skeleton: Skeleton) -> dict[str, int]:
+    """Role → joint index for the roles whose joint name follows a known convention."""
+    roles = {}
+    lowered = [n.lower() for n in skeleton.names]
+    for role, patterns in ROLE_PATTERNS.items():
+        for pattern in patterns:
+            hits = [i for i, n in enumerate(lowered) if re.match(pattern, n)]
+            if hits:
+                roles[role] = hits[0]
+                break
+    return roles
+
+
+def _chain(skeleton: Skeleton, ancestor: int, joint: int) -> list[int]:
+    path = [joint]
+    while path[-1] != ancestor:
+        parent = int(skeleton.parents[path[-1]])
+        if parent < 0:
+            raise ValueError(f"{skeleton.names[ancestor]} is not an ancestor of {skeleton.names[joint]}")
+        path.append(parent)
+    return path
+
+
+def partition(skeleton: Skeleton, pelvis: int, chest: int, head: int) -> dict[str, list[int]]:
+    """Spine, primary and secondary joints (§5.4.1)."""
+    spine = sorted(set(_chain(skeleton, pelvis, chest)) | set(_chain(skeleton, pelvis, head)))
+    primary = sorted(c for s in spine for c in skeleton.children(s) if c not in spine)
+    secondary = sorted(set(range(len(skeleton))) - set(spine) - set(primary))
+    return {"spine": spine, "primary": primary, "secondary": secondary}
+
+
+# --- stages --------------------------------------------------------------------------------
+
+STAGE_NAMES = ("preparation", "anticipation", "execution", "follow_through", "transition")
+
+
+@dataclass(frozen=True)
+class Stages:
+    """Frame at which each stage ends (the last ends with the clip); equal ends mean an
+    absent stage."""
+
+    preparation: int
+    anticipation: int
+    execution: int
+    follow_through: int
+    transition: int
+
+    def bounds(self) -> dict[str, tuple[int, int]]:
+        ends = [self.preparation, self.anticipation, self.execution, self.follow_through, self.transition]
+        starts = [0] + ends[:-1]
+        return {name: (s, e) for name, s, e in zip(STAGE_NAMES, starts, ends)}
+
+
+def pelvis_of(skeleton: Skeleton) -> int:
+    """The pelvis joint (guessed from names), else the root."""
+    return guess_roles(skeleton).get("pelvis", 0)
+
+
+def body_joints(skeleton: Skeleton) -> np.ndarray:
+    """The pelvis and its descendants: the body, without helper roots above it."""
+    pelvis = pelvis_of(skeleton)
+    inside = np.zeros(len(skeleton), dtype=bool)
+    inside[pelvis] = True
+    for j in range(pelvis + 1, len(skeleton)):
+        inside[j] = inside[skeleton.parents[j]]
+    return np.flatnonzero(inside)
+
+
+def _relative(motion: Motion, positions: np.ndarray) -> np.ndarray:
+    """Body joint positions relative to the pelvis, (F, B, 3)."""
+    pelvis = pelvis_of(motion.skeleton)
+    return positions[:, body_joints(motion.skeleton)] - positions[:, pelvis : pelvis + 1]
+
+
+def body_speed(motion: Motion, world: np.ndarray | None = None, sigma: float = 1.5):
+    """Smoothed mean joint speed (pelvis-relative, m/s) and acceleration magnitude per frame."""
+    positions = forward_kinematics(motion)[0] if world is None else world
+    rel = _relative(motion, positions)
+    rel = gaussian_filter1d(rel, sigma, axis=0, mode="nearest") if motion.frames > 3 else rel
+    vel = np.gradient(rel, motion.frame_time, axis=0)
+    acc = np.gradient(vel, motion.frame_time, axis=0)
+    return np.linalg.norm(vel, axis=2).mean(axis=1), np.linalg.norm(acc, axis=2).mean(axis=1)
+
+
+def extreme_poses(motion: Motion, p: float = 0.15, world: np.ndarray | None = None) -> list[int]:
+    """Interior frames where speed and acceleration are both locally minimal and the speed
+    is in the lowest ``p`` of the clip's range."""
+    speed, accel = body_speed(motion, world)
+    n = len(speed)
+    if n < 5:
+        return []
+    low = speed.min() + p * (speed.max() - speed.min())
+    out = []
+    for i in range(2, n - 2):
+        if speed[i] <= low and speed[i] <= speed[i - 1] and speed[i] < speed[i + 1]:
+            window = accel[max(0, i - 2): i + 3]
+            if accel[i] <= window.min() * 1.5 + 1e-9:
+                out.append(i)
+    # keep one frame per low stretch: the slowest
+    merged: list[int] = []
+    for i in out:
+        if merged and i - merged[-1] <= 3:
+            if speed[i] < speed[merged[-1]]:
+                merged[-1] = i
+        else:
+            merged.append(i)
+    return merged
+
+
+def _main_direction(motion: Motion, world: np.ndarray, a: int, b: int) -> np.ndarray:
+    rel = _relative(motion, world)
+    moved = rel[b] - rel[a]
+    k = int(np.argmax(np.linalg.norm(moved, axis=1)))
+    return moved[k]
+
+
+def stages(motion: Motion, p: float = 0.15) -> Stages:
+    """The five animation stages of a clip (§5.3.2)."""
+    world = forward_kinematics(motion)[0]
+    n = motion.frames
+    poses = extreme_poses(motion, p, world)
+    if len(poses) > 4:  # keep the four slowest, in order
+        speed, _ = body_speed(motion, world)
+        poses = sorted(sorted(poses, key=lambda i: speed[i])[:4])
+    if len(poses) == 4:
+        ends = poses
+    elif len(poses) == 3:
+        ends = [0] + poses  # no preparation
+    elif len(poses) == 2:
+        a, b = poses
+        reverses = float(_main_direction(motion, world, 0, a) @ _main_direction(motion, world, a, b)) < 0
+        ends = [0, a, b, b] if reverses else [0, 0, a, b]
+    elif len(poses) == 1:
+        ends = [0, 0, poses[0], poses[0]]
+    else:
+        ends = [0, 0, n, n]
+    return Stages(*ends, n)
+
+
+# --- cycles and contacts -------------------------------------------------------------------
+
+def cycle_period(motion: Motion, shortest: float = 0.4, longest: float = 2.0, world: np.ndarray | None = None) -> int:
+    """Frames per cycle: the lag at which the pelvis-relative pose best repeats."""
+    positions = forward_kinematics(motion)[0] if world is None else world
+    rel = _relative(motion, positions).reshape(motion.frames, -1)
+    lo = max(1, int(round(shortest / motion.frame_time)))
+    hi = min(motion.frames // 2, int(round(longest / motion.frame_time)))
+    if hi <= lo:
+        return motion.frames
+    lags = np.arange(lo, hi + 1)
+    cost = np.array([np.mean(np.sum((rel[lag:] - rel[:-lag]) ** 2, axis=1)) for lag in lags])
+    interior = [i for i in range(1, len(cost) - 1) if cost[i] <= cost[i - 1] and cost[i] < cost[i + 1]]
+    if not interior:
+        return int(lags[int(np.argmin(cost))])
+    best = min(cost[i] for i in interior)
+    return int(lags[next(i for i in interior if cost[i] <= best * 1.1 + 1e-12)])
+
+
+def cycle_length(motion: Motion, period: int | None = None) -> float:
+    """Horizontal distance (m) the pelvis travels per cycle, averaged over the clip."""
+    world = forward_kinematics(motion)[0]
+    period = cycle_period(motion, world=world) if period is None else period
+    root = world[:, pelvis_of(motion.skeleton)][:, [0, 2]]
+    if period >= motion.frames:
+        return float(np.linalg.norm(root[-1] - root[0]))
+    steps = np.linalg.norm(root[period:] - root[:-period], axis=1)
+    return float(steps.mean())
+
+
+def foot_contacts(motion: Motion, joints: list[int], height: float = 0.03, speed: float = 0.25,
+                  world: np.ndarray | None = None) -> np.ndarray:
+    """(F, len(joints)) bool: each joint within ``height`` m of its lowest point in the clip
+    and slower than ``speed`` m/s."""
+    positions = forward_kinematics(motion)[0] if world is None else world
+    feet = positions[:, joints]
+    low = feet[:, :, 1] - feet[:, :, 1].min(axis=0)
+    vel = np.linalg.norm(np.gradient(feet, motion.frame_time, axis=0), axis=2)
+    return (low <= height) & (vel <= speed)

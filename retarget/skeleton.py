@@ -1,0 +1,108 @@
+"""Skeletons and motions as plain arrays.
+
+A :class:`Skeleton` is a joint tree: names, parent indices (``-1`` for the root; parents
+always come before their children), rest offsets from the parent, each joint's BVH channel
+layout, and End Sites. A :class:`Motion` is a skeleton animated at a frame rate: per frame
+and joint a local translation (the rest offset for joints without position channels; the
+root's position for the root) and a local rotation quaternion ``(x, y, z, w)``.
+
+Units: lengths are in metres inside the project (``read_bvh`` scales file units); angles
+are quaternions. World frame: right-handed, +y up.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+POSITION_CHANNELS = ("Xposition", "Yposition", "Zposition")
+ROTATION_CHANNELS = ("Xrotation", "Yrotation", "Zrotation")
+
+
+@dataclass(frozen=True, eq=False)
+class Skeleton:
+    names: tuple[str, ...]
+    parents: np.ndarray  # (J,) int, -1 for the root, parents[j] < j
+    offsets: np.ndarray  # (J, 3) rest offset from the parent, metres
+    channels: tuple[tuple[str, ...], ...]  # per joint, BVH channel names in file order
+    end_sites: dict = field(default_factory=dict)  # joint index -> (3,) End Site offset, metres
+
+    def __post_init__(self) -> None:
+        n = len(self.names)
+        if self.parents.shape != (n,) or self.offsets.shape != (n, 3) or len(self.channels) != n:
+            raise ValueError("skeleton arrays do not agree in length")
+        if n and (self.parents[0] != -1 or np.any(self.parents[1:] >= np.arange(1, n)) or np.any(self.parents[1:] < 0)):
+            raise ValueError("joints must be ordered parents first, with a single root at index 0")
+
+    def __len__(self) -> int:
+        return len(self.names)
+
+    def index(self, name: str) -> int:
+        try:
+            return self.names.index(name)
+        except ValueError:
+            raise KeyError(f"no joint {name!r} in the skeleton") from None
+
+    def children(self, j: int) -> list[int]:
+        return [int(c) for c in np.flatnonzero(self.parents == j)]
+
+
+@dataclass(frozen=True, eq=False)
+class Motion:
+    skeleton: Skeleton
+    translations: np.ndarray  # (F, J, 3) local translation of each joint, metres
+    rotations: np.ndarray  # (F, J, 4) local rotation quaternions xyzw
+    frame_time: float  # seconds per frame, exactly as given (no rounding of the rate)
+
+    def __post_init__(self) -> None:
+        f, j = self.rotations.shape[:2]
+        if self.translations.shape != (f, j, 3) or self.rotations.shape != (f, j, 4) or j != len(self.skeleton):
+            raise ValueError("motion arrays do not agree with each other or with the skeleton")
+
+    @property
+    def frames(self) -> int:
+        return len(self.rotations)
+
+    @property
+    def fps(self) -> float:
+        return 1.0 / self.frame_time
+
+    @property
+    def duration(self) -> float:
+        return self.frames * self.frame_time
+
+    @property
+    def root(self) -> np.ndarray:
+        """(F, 3) root position."""
+        return self.translations[:, 0]
+
+    def slice(self, start: int, stop: int) -> "Motion":
+        """Frames ``[start, stop)``."""
+        return replace(self, translations=self.translations[start:stop], rotations=self.rotations[start:stop])
+
+
+def forward_kinematics(motion: Motion) -> tuple[np.ndarray, np.ndarray]:
+    """World positions (F, J, 3) and world rotations (F, J, 4) of every joint."""
+    sk = motion.skeleton
+    f, j = motion.frames, len(sk)
+    positions = np.empty((f, j, 3))
+    rotations: list[Rotation | None] = [None] * j
+    for k in range(j):
+        local = Rotation.from_quat(motion.rotations[:, k].reshape(-1, 4))
+        p = sk.parents[k]
+        if p < 0:
+            rotations[k] = local
+            positions[:, k] = motion.translations[:, k]
+        else:
+            rotations[k] = rotations[p] * local
+            positions[:, k] = positions[:, p] + rotations[p].apply(motion.translations[:, k])
+    return positions, np.stack([r.as_quat() for r in rotations], axis=1)
+
+
+def end_site_positions(motion: Motion, world: tuple[np.ndarray, np.ndarray] | None = None) -> dict[int, np.ndarray]:
+    """World positions (F, 3) of each End Site, by its joint."""
+    positions, rotations = world if world is not None else forward_kinematics(motion)
+    return {j: positions[:, j] + Rotation.from_quat(rotations[:, j]).apply(off)
+            for j, off in motion.skeleton.end_sites.items()}
