@@ -146,6 +146,10 @@ def cmd_library(args) -> int:
     from doodle.pipeline import load_actions
     from grammar.library import overlaps
 
+    if args.library_command == "import":
+        return _library_import(args)
+    if args.library_command == "show":
+        return _library_show(args)
     compiled = load_actions(args.library, not args.no_builtin)
     lib = compiled.library
     if args.library_command == "list":
@@ -158,6 +162,46 @@ def cmd_library(args) -> int:
           f"{len(found)} overlapping pair{'s' * (len(found) != 1)}")
     for o in found:
         print(f"  {o.first} ~ {o.second}: both accept {' '.join(o.witness)}")
+    return 0
+
+
+def _library_import(args) -> int:
+    from library.manifest import load_library
+    from retarget.clips import load_clips
+    from retarget.importer import import_library
+
+    output = Path(args.output or args.name)
+    lib = import_library(args.folder, args.name, output, args.map, args.include)
+    clips = load_clips(load_library(output))  # validates and analyses what was written
+    print(f"{output / 'library.toml'}: {len(lib.actions)} actions from {sum(len(a.clips) for a in lib.actions)} clips")
+    for name, found in clips.items():
+        c = found[0]
+        b = c.stages.bounds()
+        cycle = f", cycle {c.cycle_length:.2f} m" if c.cycle_length is not None else ""
+        rec = "recognisable" if lib.action(name).expression else "clip only"
+        print(f"  {name:<18} {len(found)} clip(s), {c.motion.frames} frames at {c.motion.fps:.4g} fps{cycle}; "
+              f"execution frames {b['execution'][0]}-{b['execution'][1]}; {rec}")
+    return 0
+
+
+def _library_show(args) -> int:
+    from library.manifest import builtin, combine, load_library
+    from retarget.clips import load_clip
+
+    user = load_library(args.library) if args.library else None
+    lib = combine(None if args.no_builtin else builtin(), user)
+    action = lib.action(args.action)
+    flags = ", ".join(f for f in ("cyclic", "in_place", "jumping") if getattr(action, f)) or "none"
+    print(f"{action.name}  (from {action.source})\n  expression: {action.expression or '(none: clip only)'}\n  flags: {flags}")
+    if action.note:
+        print(f"  note: {action.note}")
+    for path in action.clips:
+        clip = load_clip(lib, action, path)
+        stages = ", ".join(f"{k} {s}-{e}" for k, (s, e) in clip.stages.bounds().items())
+        cycle = f"; cycle {clip.cycle_length:.2f} m" if clip.cycle_length is not None else ""
+        print(f"  clip {path}: {clip.motion.frames} frames at {clip.motion.fps:.4g} fps{cycle}\n    stages: {stages}")
+    if not action.clips:
+        print("  clips: none yet")
     return 0
 
 
@@ -236,10 +280,24 @@ def build_parser() -> argparse.ArgumentParser:
     _segmenter_options(p)
     p.set_defaults(run=cmd_recognize)
 
-    p = sub.add_parser("library", help="inspect action libraries: list, check")
-    p.add_argument("library_command", choices=["list", "check"], metavar="list|check")
-    _library_options(p)
-    p.set_defaults(run=cmd_library)
+    p = sub.add_parser("library", help="action libraries: list, show, check, import")
+    lsub = p.add_subparsers(dest="library_command", required=True, metavar="list|show|check|import")
+    for cmd, text in (("list", "every action with its flags and expression"),
+                      ("check", "compile every expression and report overlapping actions")):
+        q = lsub.add_parser(cmd, help=text)
+        _library_options(q)
+        q.set_defaults(run=cmd_library)
+    q = lsub.add_parser("show", help="one action: expression, flags, clips with their stages")
+    q.add_argument("action")
+    _library_options(q)
+    q.set_defaults(run=cmd_library)
+    q = lsub.add_parser("import", help="build a library from a folder of BVH clips")
+    q.add_argument("folder", metavar="DIR")
+    q.add_argument("--name", required=True, help="the library's name")
+    q.add_argument("--map", metavar="FILE", help="TOML rules naming actions from file names")
+    q.add_argument("--include", default="*.bvh", metavar="GLOB", help="only files matching (default *.bvh)")
+    q.add_argument("-o", "--output", metavar="OUT", help="library folder to write (default: ./NAME)")
+    q.set_defaults(run=cmd_library)
 
     p = sub.add_parser("import", help="convert a CSV recording into a doodle file")
     p.add_argument("file", metavar="CSV")

@@ -213,3 +213,37 @@ def combine(base: Library | None, user: Library | None) -> Library:
     names = {i.name for i in user.interactions}
     interactions = tuple(i for i in base.interactions if i.name not in names) + user.interactions
     return Library(f"{base.name}+{user.name}", tuple(merged), user.source, roles, interactions)
+
+
+def _toml_string(text: str) -> str:
+    return '"' + text.replace("\\", "\\\\").replace('"', '\\"').replace("\n", "\\n") + '"'
+
+
+def format_library(library: Library, folder) -> str:
+    """TOML text of a library whose clip paths are written relative to ``folder``."""
+    import os
+
+    lines = ["[library]", f"name = {_toml_string(library.name)}", "format = 1", ""]
+    if library.roles:
+        lines.append("[skeleton]")
+        lines += [f"{role} = {_toml_string(joint)}" for role, joint in library.roles.items()]
+        lines.append("")
+    for a in library.actions:
+        lines += ["[[actions]]", f"name = {_toml_string(a.name)}"]
+        if a.expression:
+            lines.append(f"expression = {_toml_string(a.expression)}")
+        lines += [f"{flag} = {str(getattr(a, flag)).lower()}" for flag in FLAGS]
+        if a.clips:
+            rel = [os.path.relpath(c, folder) for c in a.clips]
+            lines.append("clips = [" + ", ".join(_toml_string(c) for c in rel) + "]")
+        if a.stages is not None:
+            lines.append(f"stages = [{', '.join(str(s) for s in a.stages)}]")
+        if a.cycle_length is not None:
+            lines.append(f"cycle_length = {a.cycle_length:.4f}")
+        if a.note:
+            lines.append(f"note = {_toml_string(a.note)}")
+        lines.append("")
+    for i in library.interactions:
+        lines += ["[[interactions]]", f"name = {_toml_string(i.name)}",
+                  "actions = [" + ", ".join(_toml_string(x) for x in i.actions) + "]", ""]
+    return "\n".join(lines)

@@ -109,3 +109,44 @@ def test_manifest_clips_roles_and_unknown_joints(tmp_path):
         '[library]\nname = "mine"\n[[actions]]\nname = "Kick"\nclips = ["clips/kick.bvh"]\nstages = [10, 5, 40, 60]\n')
     with pytest.raises(DoodleError, match="field 'stages' must be four increasing"):
         load_library(folder)
+
+
+def test_import_bandai_normal_style_gives_a_usable_library(tmp_path, capsys):
+    """`doodle library import` of the Bandai dataset-1 normal-style clips: built-in names and
+    expressions for walk, kick, punch…; stages for kick and punch; the walk's cycle length
+    within 10 % of the hips' travel per cycle; the library recognises the demo doodle."""
+    if not BANDAI.exists():
+        pytest.skip("Bandai data not found")
+    from doodle.cli import main
+
+    out = tmp_path / "bandai"
+    assert main(["library", "import", str(BANDAI), "--name", "bandai", "--include", "*_normal_*", "-o", str(out)]) == 0
+    report = capsys.readouterr().out
+    assert "Walk" in report and "Kick" in report and "Punch" in report
+    lib = load_library(out)
+    assert lib.action("Walk").expression and lib.action("Walk").cyclic
+    assert not lib.action("slash").expression  # no built-in counterpart: clip only
+    clips = load_clips(lib)
+    for name in ("Kick", "Punch"):
+        b = clips[name][0].stages.bounds()["execution"]
+        assert 0 < b[1] - b[0] < clips[name][0].motion.frames
+    walk = next(c for c in clips["Walk"] if c.motion.frames > 100)
+    assert walk.cycle_length == pytest.approx(1.37, rel=0.10)  # hips: 1.355–1.387 m per cycle
+    root = Path(__file__).resolve().parents[1]
+    assert main(["recognize", "--library", str(out), str(root / "examples" / "demo.doodle")]) == 0
+    assert "Walk" in capsys.readouterr().out
+
+
+def test_import_errors(tmp_path):
+    from retarget.importer import import_library
+
+    with pytest.raises(DoodleError, match="not a folder"):
+        import_library(tmp_path / "nope", "x", tmp_path / "out")
+    (tmp_path / "empty").mkdir()
+    with pytest.raises(DoodleError, match="no BVH files"):
+        import_library(tmp_path / "empty", "x", tmp_path / "out")
+    bad_map = tmp_path / "map.toml"
+    bad_map.write_text('[[map]]\nmatch = "*"\n')
+    (tmp_path / "empty" / "a.bvh").write_text("HIERARCHY\n")
+    with pytest.raises(DoodleError, match="map #1: needs 'match'"):
+        import_library(tmp_path / "empty", "x", tmp_path / "out", bad_map)

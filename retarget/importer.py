@@ -1,0 +1,100 @@
+"""Build a library from a folder of BVH clips (Mixamo, CMU, Bandai Namco, DeepMimic…).
+
+Each file becomes a clip of an action. The action is named by the first rule of a mapping
+file that matches the file name, else from the file name itself (Bandai's
+``dataset-1_{content}_{style}_{id}`` gives ``content``; otherwise the stem without a trailing
+take number). A name that is a built-in action, or a known alias of one (``walk-left`` →
+Side Walk Left), takes that action's expression and flags, so the imported clips are
+recognised at once; other actions are clip-only until the mapping file or the learning
+wizard gives them an expression. Stages, cycle lengths and foot contacts are extracted from
+the clips when the library is loaded (:mod:`retarget.clips`) and reported here.
+
+Mapping file (TOML)::
+
+    [[map]]
+    match = "*punch*"          # a glob on the file name
+    action = "Punch"           # the action the clip belongs to
+    expression = "T_N_Z T_Z"   # optional
+    cyclic = false             # optional flags
+"""
+
+from __future__ import annotations
+
+import fnmatch
+import re
+import tomllib
+from dataclasses import replace
+from pathlib import Path
+
+from doodle.errors import DoodleError
+from doodle.fileformat import atomic_write
+from library.manifest import FLAGS, ActionDef, Library, builtin, format_library, manifest_path
+
+ALIASES = {
+    "walk": "Walk", "walk-back": "Walk Back", "walkback": "Walk Back", "walk-left": "Side Walk Left",
+    "walk-right": "Side Walk Right", "kick": "Kick", "punch": "Punch", "jump": "Jump", "backflip": "Back Flip",
+    "back-flip": "Back Flip", "dance": "Dance", "dance-short": "Dance", "idle": "Idle", "stomp": "Stomp",
+    "throw": "Throw", "bye": "Greet", "byebye": "Greet", "greet": "Greet",
+    "raise-up-both-hands": "Raise Arms", "raise-up-right-hand": "Raise One Arm", "raise-up-left-hand": "Raise One Arm",
+}
+CYCLIC_WORDS = ("walk", "run", "jog", "dash", "crawl")
+BANDAI = re.compile(r"^dataset-\d+_(?P<content>.+?)_(?P<style>[a-z-]+)_(?P<take>\d+)$")
+
+
+def read_map(path) -> list[dict]:
+    try:
+        data = tomllib.loads(Path(path).read_text(encoding="utf-8"))
+    except OSError as e:
+        raise DoodleError(f"{path}: cannot read: {e.strerror}") from None
+    except tomllib.TOMLDecodeError as e:
+        raise DoodleError(f"{path}: not valid TOML: {e}") from None
+    rules = data.get("map", [])
+    for i, rule in enumerate(rules, 1):
+        if not isinstance(rule, dict) or not isinstance(rule.get("match"), str) or not isinstance(rule.get("action"), str):
+            raise DoodleError(f"{path}: map #{i}: needs 'match' (a glob) and 'action' (a name)")
+        extra = set(rule) - {"match", "action", "expression", *FLAGS}
+        if extra:
+            raise DoodleError(f"{path}: map #{i}: unknown field {sorted(extra)[0]!r}")
+    return rules
+
+
+def name_of(path: Path) -> str:
+    stem = path.stem
+    m = BANDAI.match(stem)
+    if m:
+        return m.group("content")
+    return re.sub(r"[_-]?\d+$", "", stem) or stem
+
+
+def import_library(folder, name: str, output, mapping=None, include: str = "*.bvh") -> Library:
+    """Write a library for the BVH files of ``folder`` into ``output``; returns it."""
+    folder, output = Path(folder), Path(output)
+    if not folder.is_dir():
+        raise DoodleError(f"{folder}: not a folder of BVH files")
+    files = sorted(p for p in folder.iterdir() if p.suffix.lower() == ".bvh" and fnmatch.fnmatch(p.name, include))
+    if not files:
+        raise DoodleError(f"{folder}: no BVH files matching {include!r}")
+    rules = read_map(mapping) if mapping else []
+    known = {a.name: a for a in builtin().actions}
+    actions: dict[str, ActionDef] = {}
+    for path in files:
+        rule = next((r for r in rules if fnmatch.fnmatch(path.name, r["match"])), None)
+        raw = rule["action"] if rule else name_of(path)
+        action_name = ALIASES.get(raw.lower(), raw)
+        if action_name in actions:
+            actions[action_name] = replace(actions[action_name], clips=actions[action_name].clips + (str(path.resolve()),))
+            continue
+        base = known.get(action_name)
+        flags = {f: getattr(base, f) for f in FLAGS} if base else {
+            "cyclic": any(w in raw.lower() for w in CYCLIC_WORDS), "in_place": not any(
+                w in raw.lower() for w in CYCLIC_WORDS), "jumping": "jump" in raw.lower() or "flip" in raw.lower()}
+        expression = base.expression if base else ""
+        if rule:
+            expression = rule.get("expression", expression)
+            flags.update({f: rule[f] for f in FLAGS if f in rule})
+        actions[action_name] = ActionDef(action_name, expression, source=str(manifest_path(output)),
+                                         clips=(str(path.resolve()),), **flags)
+    library = Library(name, tuple(actions.values()), str(manifest_path(output)))
+    output.mkdir(parents=True, exist_ok=True)
+    atomic_write(manifest_path(output), [format_library(library, output.resolve())])
+    return library
