@@ -150,6 +150,8 @@ def cmd_library(args) -> int:
         return _library_import(args)
     if args.library_command == "show":
         return _library_show(args)
+    if args.library_command == "sheet":
+        return _library_sheet(args)
     compiled = load_actions(args.library, not args.no_builtin)
     lib = compiled.library
     if args.library_command == "list":
@@ -181,6 +183,36 @@ def _library_import(args) -> int:
         rec = "recognisable" if lib.action(name).expression else "clip only"
         print(f"  {name:<18} {len(found)} clip(s), {c.motion.frames} frames at {c.motion.fps:.4g} fps{cycle}; "
               f"execution frames {b['execution'][0]}-{b['execution'][1]}; {rec}")
+    return 0
+
+
+def _library_sheet(args) -> int:
+    import tempfile
+
+    from library.manifest import builtin, combine, load_library
+    from retarget.clips import load_clips
+    from retarget.sheet import contact_sheet
+
+    user = load_library(args.library) if args.library else None
+    lib = combine(None if args.no_builtin else builtin(), user)
+    clips = load_clips(lib)
+    if not clips:
+        raise DoodleError(f"{lib.source}: no action has clips to draw")
+    motions = {name: found[0].motion for name, found in clips.items()}
+    frames = {name: [0, *list(found[0].stages.bounds()[k][1] for k in ("preparation", "anticipation", "execution",
+                                                                        "follow_through")), found[0].motion.frames - 1]
+              for name, found in clips.items()}
+    out = Path(args.output)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    with tempfile.NamedTemporaryFile(suffix=".png", dir=out.parent, delete=False) as tmp:
+        pass
+    try:
+        contact_sheet(motions, tmp.name, frames=frames)
+        os.replace(tmp.name, out)
+    finally:
+        if os.path.exists(tmp.name):
+            os.unlink(tmp.name)
+    print(f"{out}: {len(motions)} clips, key frames at the stage ends (side and front views)")
     return 0
 
 
@@ -281,7 +313,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(run=cmd_recognize)
 
     p = sub.add_parser("library", help="action libraries: list, show, check, import")
-    lsub = p.add_subparsers(dest="library_command", required=True, metavar="list|show|check|import")
+    lsub = p.add_subparsers(dest="library_command", required=True, metavar="list|show|check|sheet|import")
     for cmd, text in (("list", "every action with its flags and expression"),
                       ("check", "compile every expression and report overlapping actions")):
         q = lsub.add_parser(cmd, help=text)
@@ -289,6 +321,10 @@ def build_parser() -> argparse.ArgumentParser:
         q.set_defaults(run=cmd_library)
     q = lsub.add_parser("show", help="one action: expression, flags, clips with their stages")
     q.add_argument("action")
+    _library_options(q)
+    q.set_defaults(run=cmd_library)
+    q = lsub.add_parser("sheet", help="contact sheet PNG: each action's clip at its stage ends")
+    q.add_argument("-o", "--output", default="out/library_sheet.png", metavar="PNG")
     _library_options(q)
     q.set_defaults(run=cmd_library)
     q = lsub.add_parser("import", help="build a library from a folder of BVH clips")

@@ -1,0 +1,49 @@
+"""The built-in library as shipped: manifest and generated clip index agree, every clip
+loads with its stages, and the contact sheet draws them."""
+
+import tomllib
+from pathlib import Path
+
+import numpy as np
+
+from doodle.cli import main
+from library.manifest import BUILTIN, builtin
+from retarget.clips import load_clips
+
+
+def test_manifest_matches_the_generated_clip_index():
+    """library/builtin/make_clips.py writes clips.toml; its clips, stages and cycle lengths
+    must have been merged into library.toml."""
+    index = tomllib.loads((BUILTIN / "clips.toml").read_text())
+    lib = builtin()
+    for entry in index["actions"]:
+        action = lib.action(entry["name"])
+        assert [Path(c).name for c in action.clips] == [Path(c).name for c in entry["clips"]], entry["name"]
+        assert list(action.stages) == entry["stages"], entry["name"]
+        assert action.cycle_length == entry.get("cycle_length"), entry["name"]
+    assert lib.roles == index["skeleton"]
+
+
+def test_every_action_and_interaction_clip_loads_with_stages():
+    lib = builtin()
+    clips = load_clips(lib)
+    assert set(clips) == set(lib.names) and len(clips) == 31
+    for name, (clip,) in clips.items():
+        b = clip.stages.bounds()
+        assert 0 < b["execution"][1] - b["execution"][0], name
+        assert clip.stages.transition == clip.motion.frames
+        if lib.action(name).cyclic and name != "Idle":
+            assert clip.cycle_length > 0.3, name
+    assert {i.name for i in lib.interactions} == {"Slap", "Kiss"}
+
+
+def test_library_sheet_draws_every_clip(tmp_path, capsys):
+    out = tmp_path / "sheet.png"
+    assert main(["library", "sheet", "-o", str(out)]) == 0
+    assert "31 clips" in capsys.readouterr().out
+    import matplotlib.image as mpimg
+
+    image = mpimg.imread(out)
+    assert image.shape[0] > 1000 and image.shape[1] > 500
+    ink = (image[..., :3].mean(axis=2) < 0.5).mean()
+    assert 0.002 < ink < 0.3  # figures are drawn, the page is not blank nor black
