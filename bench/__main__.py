@@ -2,7 +2,7 @@
 
 import sys
 
-from bench import bvh_speed, matcher_speed, real_gestures, segmenter_speed
+from bench import bvh_speed, matcher_speed, real_gestures, segmenter_speed, stages_accuracy
 
 
 def main() -> int:
@@ -14,6 +14,8 @@ def main() -> int:
     matcher_speed.main()
     print()
     bvh_speed.main()
+    print()
+    stages_accuracy.main()
     return 0
 
 
