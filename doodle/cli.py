@@ -57,44 +57,48 @@ def _load(path, args, mounts, raw=False):
     return load(path, args.convention, columns, tracks, mounts, raw)
 
 
+def _each_file(args, mounts, work) -> int:
+    """``work(path, doodle)`` for every input file; a bad file is reported in one line and
+    the others still run; non-zero exit status if any failed."""
+    failed = 0
+    for path in args.files:
+        try:
+            work(path, _load(path, args, mounts))
+        except DoodleError as e:
+            _error(e)
+            failed += 1
+    return EXIT_BAD_INPUT if failed else 0
+
+
+def _seconds(doodle):
+    """Sample index → seconds from the first sample (an end index past the last sample
+    gives the last sample's time)."""
+    t, last = doodle.t, len(doodle.t) - 1
+    return lambda i: round(float(t[min(i, last)] - t[0]), 6)
+
+
 def cmd_tokens(args) -> int:
     from doodle.segmenter import tokenize_doodle
 
     params, mounts = _params(args)
-    failed = 0
-    for path in args.files:
-        try:
-            doodle = _load(path, args, mounts)
-            tokens = tokenize_doodle(doodle, params)
-        except DoodleError as e:
-            _error(e)
-            failed += 1
-            continue
-        t = doodle.t
-        last = len(t) - 1
 
-        def seconds(i: int) -> float:
-            return round(float(t[min(i, last)] - t[0]), 6)
-
+    def work(path, doodle):
+        tokens = tokenize_doodle(doodle, params)
+        seconds = _seconds(doodle)
         if args.json:
-            record = {
-                "file": str(path),
-                "tracks": {
-                    name: [{"token": k.name, "start": seconds(k.start), "end": seconds(k.end),
-                            "samples": [k.start, k.end]} for k in toks]
-                    for name, toks in tokens.items()
-                },
-            }
-            print(json.dumps(record), flush=True)
-        else:
-            print(f"{path}  ({len(doodle.tracks)} track{'s' * (len(doodle.tracks) != 1)}, "
-                  f"{doodle.t[-1]:.2f} s at {doodle.rate:g} Hz, device {doodle.device})")
-            for name, toks in tokens.items():
-                print(f"  {name}: {' '.join(k.name for k in toks) or '(no tokens)'}")
-                if args.verbose:
-                    for k in toks:
-                        print(f"    {seconds(k.start):8.3f} {seconds(k.end):8.3f}  {k.name}")
-    return EXIT_BAD_INPUT if failed else 0
+            tracks = {name: [{"token": k.name, "start": seconds(k.start), "end": seconds(k.end),
+                              "samples": [k.start, k.end]} for k in toks] for name, toks in tokens.items()}
+            print(json.dumps({"file": str(path), "tracks": tracks}), flush=True)
+            return
+        print(f"{path}  ({len(doodle.tracks)} track{'s' * (len(doodle.tracks) != 1)}, "
+              f"{doodle.t[-1]:.2f} s at {doodle.rate:g} Hz, device {doodle.device})")
+        for name, toks in tokens.items():
+            print(f"  {name}: {' '.join(k.name for k in toks) or '(no tokens)'}")
+            if args.verbose:
+                for k in toks:
+                    print(f"    {seconds(k.start):8.3f} {seconds(k.end):8.3f}  {k.name}")
+
+    return _each_file(args, mounts, work)
 
 
 def _library_options(p: argparse.ArgumentParser) -> None:
@@ -107,21 +111,10 @@ def cmd_recognize(args) -> int:
 
     params, mounts = _params(args)
     compiled = load_actions(args.library, not args.no_builtin)
-    failed = 0
-    for path in args.files:
-        try:
-            doodle = _load(path, args, mounts)
-            result = recognize(doodle, compiled, params, args.threshold, args.direction_costs)
-        except DoodleError as e:
-            _error(e)
-            failed += 1
-            continue
-        t = doodle.t
-        last = len(t) - 1
 
-        def seconds(i: int) -> float:
-            return round(float(t[min(i, last)] - t[0]), 6)
-
+    def work(path, doodle):
+        result = recognize(doodle, compiled, params, args.threshold, args.direction_costs)
+        seconds = _seconds(doodle)
         if args.json:
             segments = [
                 {"track": name, "action": s.action, "start": seconds(s.start), "end": seconds(s.end),
@@ -130,7 +123,7 @@ def cmd_recognize(args) -> int:
                 for name, (toks, segs) in result.items() for s in segs
             ]
             print(json.dumps({"file": str(path), "segments": segments}), flush=True)
-            continue
+            return
         print(f"{path}  ({doodle.t[-1]:.2f} s, {len(compiled.library.actions)} actions)")
         for name, (toks, segs) in result.items():
             print(f"  {name}: {', '.join(s.action for s in segs) or '(nothing)'}")
@@ -139,7 +132,8 @@ def cmd_recognize(args) -> int:
                     how = "exact" if s.exact else ("no match" if s.action == "unknown" else f"distance {s.distance:g}")
                     print(f"    {seconds(s.start):8.3f} {seconds(s.end):8.3f}  {s.action:<16} {how:<12} "
                           f"{' '.join(k.name for k in toks[s.first:s.stop])}")
-    return EXIT_BAD_INPUT if failed else 0
+
+    return _each_file(args, mounts, work)
 
 
 def cmd_library(args) -> int:
@@ -248,21 +242,15 @@ def cmd_import(args) -> int:
 
 
 def cmd_info(args) -> int:
-    failed = 0
-    for path in args.files:
-        try:
-            doodle = _load(path, args, {})
-        except DoodleError as e:
-            _error(e)
-            failed += 1
-            continue
+    def work(path, doodle):
         print(f"{path}: device {doodle.device}, {doodle.rate:g} Hz nominal, {len(doodle.t)} samples, "
               f"{doodle.t[-1]:.2f} s")
         for tr in doodle.tracks:
             lost = 1.0 - tr.valid.mean()
             extra = "".join(f", {k} {v}" for k, v in (("role", tr.role), ("serial", tr.serial)) if v)
             print(f"  {tr.name}{extra}: lost tracking {lost:.1%} of samples")
-    return EXIT_BAD_INPUT if failed else 0
+
+    return _each_file(args, {}, work)
 
 
 def cmd_calibrate(args) -> int:

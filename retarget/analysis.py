@@ -157,8 +157,7 @@ def extreme_poses(motion: Motion, p: float = 0.15, world: np.ndarray | None = No
 def _ranked(motion: Motion, poses: list[int], world: np.ndarray, count: int) -> list[int]:
     """The ``count`` most pronounced extreme poses (deepest valleys), in time order."""
     speed, _ = body_speed(motion, world)
-    _, props = find_peaks(-speed, prominence=0.0, plateau_size=1)
-    valleys = find_peaks(-speed, prominence=0.0, plateau_size=1)[0]
+    valleys, props = find_peaks(-speed, prominence=0.0, plateau_size=1)
     depth = {int(v): float(pr) for v, pr in zip(valleys, props["prominences"])}
     return sorted(sorted(poses, key=lambda i: -depth.get(i, 0.0))[:count])
 
