@@ -136,6 +136,46 @@ def cmd_recognize(args) -> int:
     return _each_file(args, mounts, work)
 
 
+def cmd_compile(args) -> int:
+    from doodle.fileformat import atomic_write
+    from doodle.pipeline import compile_doodle, quality
+    from library.manifest import builtin, combine, load_library
+    from retarget.bvh import write_bvh
+
+    params, mounts = _params(args)
+    doodle = _load(args.file, args, mounts)
+    results = compile_doodle(doodle, args.library, not args.no_builtin, params, args.fps, args.scale, args.threshold)
+    lib = combine(None if args.no_builtin else builtin(), load_library(args.library) if args.library else None)
+    out = Path(args.output)
+    out.mkdir(parents=True, exist_ok=True)
+    seconds = _seconds(doodle)
+    report = {"file": str(args.file), "fps": args.fps, "duration_s": round(float(doodle.t[-1]), 6), "tracks": {}}
+    for r in results:
+        sk = r.motion.skeleton
+        roles = {k: sk.index(v) if isinstance(v, str) else v for k, v in lib.roles.items()}
+        from retarget.analysis import guess_roles
+        roles = {**guess_roles(sk), **roles}
+        bvh = out / f"{r.track}.bvh"
+        write_bvh(bvh, r.motion)
+        report["tracks"][r.track] = {
+            "bvh": str(bvh), "frames": r.motion.frames,
+            "segments": [{"action": s.action, "start": seconds(s.start), "end": seconds(s.end), "exact": s.exact,
+                          "distance": s.distance, "clip": r.clips.get(s.action),
+                          "tokens": [k.name for k in r.tokens[s.first:s.stop]]} for s in r.segments],
+            "transitions": [round(b, 6) for b in r.transitions],
+            "metrics": quality(r, roles),
+        }
+    atomic_write(out / "report.json", [json.dumps(report, indent=2) + "\n"])
+    for name, tr in report["tracks"].items():
+        m = tr["metrics"]
+        print(f"{tr['bvh']}: {tr['frames']} frames at {args.fps:g} fps; "
+              f"{', '.join(s['action'] for s in tr['segments'])}")
+        print(f"  foot skating {m['foot_skating_m_per_s']} m/s, ground penetration {m['ground_penetration_m']} m, "
+              f"root deviation {m['root_deviation_m']} m, transition smoothness {m['transition_smoothness']}")
+    print(f"{out / 'report.json'}")
+    return 0
+
+
 def cmd_library(args) -> int:
     from doodle.pipeline import load_actions
     from grammar.library import overlaps
@@ -299,6 +339,17 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--direction-costs", action="store_true", help="substitutions between near directions cost less")
     _segmenter_options(p)
     p.set_defaults(run=cmd_recognize)
+
+    p = sub.add_parser("compile", help="compile a doodle into BVH animation (one file per track) and report.json")
+    p.add_argument("file", metavar="FILE")
+    p.add_argument("-o", "--output", required=True, metavar="OUTDIR")
+    _input_options(p)
+    _library_options(p)
+    p.add_argument("--fps", type=float, default=30.0, help="output frame rate (default 30)")
+    p.add_argument("--scale", type=float, help="doodle-to-world scale (default 8.5: a 20 cm prop, a 1.7 m character)")
+    p.add_argument("--threshold", type=float, default=2.0, help="edit-distance threshold of approximate matches")
+    _segmenter_options(p)
+    p.set_defaults(run=cmd_compile)
 
     p = sub.add_parser("library", help="action libraries: list, show, check, import")
     lsub = p.add_subparsers(dest="library_command", required=True, metavar="list|show|check|sheet|import")

@@ -5,6 +5,10 @@ Today it runs the front half: samples → tokens (Segmenter) → action segments
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
+import numpy as np
+
 from doodle.errors import DoodleError
 from doodle.model import Doodle
 from doodle.segmenter import SegmenterParams, tokenize_doodle
@@ -28,3 +32,110 @@ def recognize(doodle: Doodle, compiled: Compiled, params: SegmenterParams = Segm
     automaton = compiled.automaton(threshold, direction_costs)
     tokens = tokenize_doodle(doodle, params)
     return {name: (toks, match(toks, automaton, name)) for name, toks in tokens.items()}
+
+
+# --- compile: actions → animation (first version: flat ground, built-in clips) -------------
+
+CHARACTER_HEIGHT = 1.7  # metres
+PROP_SIZE = 0.2  # metres: a 20 cm figurine plays a 1.7 m character
+
+
+@dataclass(frozen=True, eq=False)
+class Compiled:
+    """One track's animation and what went into it."""
+
+    track: str
+    motion: object  # retarget.skeleton.Motion
+    segments: list
+    tokens: list
+    path: np.ndarray  # (F, 3) transferred root path at the output frames
+    transitions: list[float]
+    clips: dict  # action -> clip path
+
+
+def compile_doodle(doodle: Doodle, library_dir=None, use_builtin: bool = True, params: SegmenterParams = SegmenterParams(),
+                   fps: float = 30.0, scale: float | None = None, threshold: float = 2.0) -> list[Compiled]:
+    """Every track of a doodle turned into an animation on one timeline."""
+    from library.manifest import builtin as builtin_library
+    from library.manifest import combine
+    from retarget.clips import load_clips
+    from retarget.sequence import Placed, sequence
+    from retarget.trajectory import Span, world_path
+
+    actions = load_actions(library_dir, use_builtin)
+    user = load_library(library_dir) if library_dir else None
+    library = combine(builtin_library() if use_builtin else None, user)
+    clips = load_clips(library)
+    idle = clips.get("Idle")
+    scale = CHARACTER_HEIGHT / PROP_SIZE if scale is None else scale
+    results = []
+    recognised = recognize(doodle, actions, params, threshold)
+    duration = float(doodle.t[-1])
+    times = np.arange(int(np.floor(duration * fps)) + 1) / fps
+    skeleton = None
+    for track in doodle.tracks:
+        tokens, segments = recognised[track.name]
+        spans, placed, used = [], [], {}
+        for seg in segments:
+            name = seg.action if seg.action in clips else "Idle"
+            if name not in clips:
+                raise DoodleError(f"{library.source}: action {seg.action!r} has no clip (and there is no Idle clip)")
+            clip = clips[name][0]
+            action = library.action(name)
+            if skeleton is None:
+                skeleton = clip.motion.skeleton
+            elif clip.motion.skeleton.names != skeleton.names:
+                raise DoodleError(f"{clip.path}: clips of one compile must share a skeleton")
+            n = clip.motion.frames
+            b = clip.stages.bounds()
+            execution = (b["execution"][0] / max(n - 1, 1), b["execution"][1] / max(n - 1, 1))
+            span = Span(seg.action, float(track.t[seg.start]), float(track.t[min(seg.end, len(track.t) - 1)]),
+                        seg.start, seg.end, action.in_place, action.jumping, action.cyclic, execution)
+            spans.append(span)
+            placed.append((span, clip))
+            used[seg.action] = clip.path
+        path, heading = world_path(track.t, track.p, spans, scale)
+        frame_path = np.column_stack([np.interp(times, track.t, path[:, k]) for k in range(3)])
+        frame_heading = np.interp(times, track.t, heading)
+        pieces = []
+        for span, clip in placed:
+            cycles = 0.0
+            if span.cyclic and clip.cycle_length:
+                seg_path = path[span.i0:span.i1]
+                length = float(np.sum(np.linalg.norm(np.diff(seg_path[:, [0, 2]], axis=0), axis=1)))
+                cycles = max(length / clip.cycle_length, 1.0) if length > 0 else max(
+                    (span.t1 - span.t0) / clip.motion.duration, 1.0)
+            elif span.cyclic:
+                cycles = max((span.t1 - span.t0) / clip.motion.duration, 1.0)
+            pieces.append(Placed(span, clip.motion, clip.roles["pelvis"], cycles))
+        motion, transitions = sequence(pieces, times, frame_path[:, [0, 2]], frame_heading, skeleton, fps)
+        results.append(Compiled(track.name, motion, segments, tokens, frame_path, transitions, used))
+    return results
+
+
+def quality(result: Compiled, roles: dict) -> dict:
+    """Report metrics: foot skating, ground penetration, root deviation from the path,
+    transition smoothness."""
+    from retarget.analysis import foot_contacts
+    from retarget.skeleton import end_site_positions, forward_kinematics
+
+    motion = result.motion
+    world = forward_kinematics(motion)
+    positions = world[0]
+    feet = [roles["left_foot"], roles["right_foot"]]
+    contacts = foot_contacts(motion, feet, world=positions)
+    vel = np.linalg.norm(np.gradient(positions[:, feet][:, :, [0, 2]], motion.frame_time, axis=0), axis=2)
+    skating = float(vel[contacts].mean()) if contacts.any() else 0.0
+    ends = end_site_positions(motion, world)
+    lowest = min([float(positions[..., 1].min())] + [float(e[:, 1].min()) for e in ends.values()])
+    pelvis = positions[:, roles["pelvis"]]
+    deviation = float(np.mean(np.linalg.norm(pelvis[:, [0, 2]] - result.path[:, [0, 2]], axis=1)))
+    acc = np.linalg.norm(np.diff(positions, n=2, axis=0), axis=2).max(axis=1) / motion.frame_time ** 2
+    times = np.arange(motion.frames) * motion.frame_time
+    near = np.zeros(len(acc), dtype=bool)
+    for b in result.transitions:
+        near |= np.abs(times[1:-1] - b) <= 0.15
+    smooth = float(acc[near].max() / max(acc[~near].max(), 1e-9)) if near.any() and (~near).any() else None
+    return {"foot_skating_m_per_s": round(skating, 4), "ground_penetration_m": round(max(0.0, -lowest), 4),
+            "root_deviation_m": round(deviation, 4),
+            "transition_smoothness": None if smooth is None else round(smooth, 3)}

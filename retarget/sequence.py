@@ -1,0 +1,126 @@
+"""Animation sequencing (thesis §5.3): one clip per segment, retimed, placed on the path,
+joined by blended transitions, into one motion on one timeline.
+
+* A non-cyclic clip is retimed to last as long as its segment (``t' = t0 + T_P/T_A (t − t0)``).
+* A cyclic clip (Walk) plays as many cycles as the path's length over the clip's cycle
+  length, the cycles retimed to fill the segment, so the steps match the distance; the
+  last cycle is a partial one (the thesis scales it down; here it is cut).
+* The root: horizontal position from the transferred path, height from the clip, yaw from
+  the path's heading composed with the clip's own root rotation.
+* Transitions: the two neighbouring clips are cross-faded over ``blend`` seconds around
+  each boundary (rotations by slerp, root by linear interpolation), with smoothstep
+  weights. (Transition points chosen on frame-distance maps, §5.3.1, are still to come.)
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from retarget.skeleton import Motion, Skeleton
+from retarget.trajectory import Span
+
+
+@dataclass(frozen=True, eq=False)
+class Placed:
+    """A clip assigned to a span: ``cycles`` > 0 for cyclic playback."""
+
+    span: Span
+    motion: Motion
+    pelvis: int
+    cycles: float = 0.0
+
+
+def _sample(motion: Motion, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Translations and rotations at clip times ``u`` (seconds), by interpolation."""
+    f = np.clip(u / motion.frame_time, 0, motion.frames - 1)
+    k = np.minimum(np.floor(f).astype(int), max(motion.frames - 2, 0))
+    w = (f - k)[:, None]
+    k1 = np.minimum(k + 1, motion.frames - 1)
+    trans = motion.translations[k] * (1 - w[:, :, None]) + motion.translations[k1] * w[:, :, None]
+    rots = _nlerp(motion.rotations[k], motion.rotations[k1], w)
+    return trans, rots
+
+
+def _nlerp(a: np.ndarray, b: np.ndarray, w: np.ndarray) -> np.ndarray:
+    """Normalised linear interpolation of quaternions, shortest way (w broadcast per row)."""
+    dot = np.sum(a * b, axis=-1, keepdims=True)
+    b = np.where(dot < 0, -b, b)
+    q = a * (1 - w[..., None]) + b * w[..., None] if w.ndim == a.ndim - 1 else a * (1 - w) + b * w
+    return q / np.linalg.norm(q, axis=-1, keepdims=True)
+
+
+def clip_time(placed: Placed, t: np.ndarray) -> np.ndarray:
+    """Clip time for doodle times ``t`` inside (or clamped to) the span."""
+    s, m = placed.span, placed.motion
+    u = np.clip((t - s.t0) / max(s.t1 - s.t0, 1e-9), 0.0, 1.0)
+    if placed.cycles > 0:
+        cycle = (m.frames - 1) * m.frame_time
+        phase = u * placed.cycles
+        return np.where(u >= 1.0, cycle, (phase % 1.0) * cycle)
+    return u * (m.frames - 1) * m.frame_time
+
+
+def pose_at(placed: Placed, t: np.ndarray, path_xz: np.ndarray, heading: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Local translations (F, J, 3) and rotations (F, J, 4) of the clip placed on the path."""
+    trans, rots = _sample(placed.motion, clip_time(placed, t))
+    p = placed.pelvis
+    yaw = Rotation.from_rotvec(np.outer(heading, [0.0, 1.0, 0.0]))
+    # the pelvis carries the character: its horizontal position follows the path, its
+    # height and tilt come from the clip; the clip's own travel is replaced
+    rest_xz = placed.motion.translations[0, p, [0, 2]]
+    local = trans[:, p].copy()
+    sway = local[:, [0, 2]] - rest_xz if placed.span.in_place else 0.0 * local[:, [0, 2]]
+    sway3 = np.column_stack([sway[:, 0], np.zeros(len(t)), sway[:, 1]])
+    moved = yaw.apply(sway3)
+    trans[:, p, 0] = path_xz[:, 0] + moved[:, 0]
+    trans[:, p, 2] = path_xz[:, 1] + moved[:, 2]
+    rots[:, p] = (yaw * Rotation.from_quat(rots[:, p])).as_quat()
+    return trans, rots
+
+
+def sequence(placed: list[Placed], times: np.ndarray, path_xz: np.ndarray, heading: np.ndarray,
+             skeleton: Skeleton, fps: float, blend: float = 0.2) -> tuple[Motion, list[float]]:
+    """The whole timeline at ``fps``; returns the motion and the transition times."""
+    frames = len(times)
+    j = len(skeleton)
+    trans = np.zeros((frames, j, 3))
+    rots = np.zeros((frames, j, 4))
+    weight = np.zeros(frames)
+    boundaries = [pl.span.t0 for pl in placed[1:]]
+    for k, pl in enumerate(placed):
+        lo = pl.span.t0 - (blend / 2 if k > 0 else 0.0)
+        hi = pl.span.t1 + (blend / 2 if k < len(placed) - 1 else 0.0)
+        mask = (times >= lo - 1e-9) & (times <= hi + 1e-9)
+        if k == 0:
+            mask |= times < pl.span.t0
+        if k == len(placed) - 1:
+            mask |= times > pl.span.t1
+        idx = np.flatnonzero(mask)
+        if len(idx) == 0:
+            continue
+        w = np.ones(len(idx))
+        tt = times[idx]
+        if k > 0:
+            w *= _smoothstep((tt - (pl.span.t0 - blend / 2)) / blend)
+        if k < len(placed) - 1:
+            w *= 1.0 - _smoothstep((tt - (pl.span.t1 - blend / 2)) / blend)
+        tr, ro = pose_at(pl, tt, path_xz[idx], heading[idx])
+        first = weight[idx] == 0
+        trans[idx] += tr * w[:, None, None]
+        prev = rots[idx]
+        dot = np.sum(prev * ro, axis=-1, keepdims=True)
+        ro = np.where(dot < 0, -ro, ro)
+        rots[idx] = np.where(first[:, None, None], ro * w[:, None, None], prev + ro * w[:, None, None])
+        weight[idx] += w
+    weight = np.maximum(weight, 1e-9)
+    trans /= weight[:, None, None]
+    rots /= np.linalg.norm(rots, axis=-1, keepdims=True)
+    return Motion(skeleton, trans, rots, 1.0 / fps), boundaries
+
+
+def _smoothstep(x: np.ndarray) -> np.ndarray:
+    x = np.clip(x, 0.0, 1.0)
+    return x * x * (3 - 2 * x)

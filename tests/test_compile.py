@@ -1,0 +1,87 @@
+"""`doodle compile`, first version: flat ground, built-in clips, one BVH per track."""
+
+import json
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from doodle.cli import main
+from doodle.fileformat import write_doodle
+from doodle.loader import load
+from doodle.synth import stroke, synth_doodle
+from retarget.bvh import read_bvh
+from retarget.skeleton import end_site_positions, forward_kinematics
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "examples"))
+from make_demo import FIG_4_7  # noqa: E402
+
+DEMO = ROOT / "examples" / "demo.doodle"
+
+
+@pytest.fixture(scope="module")
+def compiled(tmp_path_factory):
+    out = tmp_path_factory.mktemp("demo")
+    assert main(["compile", str(DEMO), "-o", str(out)]) == 0
+    return out, json.loads((out / "report.json").read_text())
+
+
+def test_demo_compiles_to_the_recognised_sequence(compiled):
+    out, report = compiled
+    track = report["tracks"]["c0"]
+    assert [s["action"] for s in track["segments"]] == FIG_4_7
+    motion = read_bvh(out / "c0.bvh", unit=1.0)
+    assert motion.frames == track["frames"] == int(np.floor(report["duration_s"] * 30)) + 1
+    assert len(track["transitions"]) == len(FIG_4_7) - 1
+    assert set(track["metrics"]) == {"foot_skating_m_per_s", "ground_penetration_m", "root_deviation_m",
+                                     "transition_smoothness"}
+
+
+def test_root_follows_the_doodle_and_stays_put_in_place(compiled):
+    """Walk segments travel the doodle's distance scaled 8.5×; Stomp stays in place; no
+    part of the body goes more than a centimetre under the ground."""
+    out, report = compiled
+    motion = read_bvh(out / "c0.bvh", unit=1.0)
+    world = forward_kinematics(motion)
+    hips = world[0][:, motion.skeleton.index("Hips")]
+    doodle = load(DEMO)
+    t, p = doodle.t, doodle.track("c0").p
+    for seg in report["tracks"]["c0"]["segments"]:
+        a, b = int(round(seg["start"] * 30)), min(int(round(seg["end"] * 30)), motion.frames - 1)
+        moved = np.linalg.norm(hips[b, [0, 2]] - hips[a, [0, 2]])
+        if seg["action"] == "Walk":
+            ia, ib = np.searchsorted(t, seg["start"]), np.searchsorted(t, seg["end"])
+            doodled = 8.5 * np.linalg.norm(p[min(ib, len(t) - 1), [0, 2]] - p[ia, [0, 2]])
+            assert moved == pytest.approx(doodled, rel=0.1)
+        if seg["action"] == "Stomp":
+            assert moved < 0.15
+    lowest = min(world[0][..., 1].min(), min(e[:, 1].min() for e in end_site_positions(motion, world).values()))
+    assert lowest > -0.01
+
+
+def test_two_tracks_share_one_timeline(tmp_path):
+    doodle = synth_doodle({"c0": [stroke("T_STILL", 0.5), stroke("T_Z", 1.0, 0.15), stroke("T_STILL", 0.5)],
+                           "c1": [stroke("T_STILL", 0.5), stroke("T_Y", 0.3), stroke("T_N_Y", 0.3),
+                                  stroke("T_STILL", 0.5)]}, seed=2)
+    path = tmp_path / "two.doodle"
+    write_doodle(path, doodle)
+    out = tmp_path / "out"
+    assert main(["compile", str(path), "-o", str(out)]) == 0
+    a, b = read_bvh(out / "c0.bvh", unit=1.0), read_bvh(out / "c1.bvh", unit=1.0)
+    assert a.frames == b.frames
+    report = json.loads((out / "report.json").read_text())
+    assert "Walk" in [s["action"] for s in report["tracks"]["c0"]["segments"]]
+    assert "Stomp" in [s["action"] for s in report["tracks"]["c1"]["segments"]]
+
+
+def test_a_failed_compile_leaves_existing_output(tmp_path, capsys):
+    out = tmp_path / "out"
+    assert main(["compile", str(DEMO), "-o", str(out)]) == 0
+    before = (out / "report.json").read_text()
+    bad = tmp_path / "bad.doodle"
+    bad.write_text("# doodle 1\n")
+    assert main(["compile", str(bad), "-o", str(out)]) == 1
+    assert "bad.doodle" in capsys.readouterr().err
+    assert (out / "report.json").read_text() == before
