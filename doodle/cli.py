@@ -139,22 +139,16 @@ def cmd_recognize(args) -> int:
 def cmd_compile(args) -> int:
     from doodle.fileformat import atomic_write
     from doodle.pipeline import compile_doodle, quality
-    from library.manifest import builtin, combine, load_library
     from retarget.bvh import write_bvh
 
     params, mounts = _params(args)
     doodle = _load(args.file, args, mounts)
     results = compile_doodle(doodle, args.library, not args.no_builtin, params, args.fps, args.scale, args.threshold)
-    lib = combine(None if args.no_builtin else builtin(), load_library(args.library) if args.library else None)
     out = Path(args.output)
     out.mkdir(parents=True, exist_ok=True)
     seconds = _seconds(doodle)
     report = {"file": str(args.file), "fps": args.fps, "duration_s": round(float(doodle.t[-1]), 6), "tracks": {}}
     for r in results:
-        sk = r.motion.skeleton
-        roles = {k: sk.index(v) if isinstance(v, str) else v for k, v in lib.roles.items()}
-        from retarget.analysis import guess_roles
-        roles = {**guess_roles(sk), **roles}
         bvh = out / f"{r.track}.bvh"
         write_bvh(bvh, r.motion)
         report["tracks"][r.track] = {
@@ -163,7 +157,7 @@ def cmd_compile(args) -> int:
                           "distance": s.distance, "clip": r.clips.get(s.action),
                           "tokens": [k.name for k in r.tokens[s.first:s.stop]]} for s in r.segments],
             "transitions": [round(b, 6) for b in r.transitions],
-            "metrics": quality(r, roles),
+            "metrics": quality(r),
         }
     atomic_write(out / "report.json", [json.dumps(report, indent=2) + "\n"])
     for name, tr in report["tracks"].items():

@@ -51,6 +51,7 @@ class Compiled:
     path: np.ndarray  # (F, 3) transferred root path at the output frames
     transitions: list[float]
     clips: dict  # action -> clip path
+    roles: dict  # role -> joint index on the output skeleton
 
 
 def compile_doodle(doodle: Doodle, library_dir=None, use_builtin: bool = True, params: SegmenterParams = SegmenterParams(),
@@ -66,26 +67,20 @@ def compile_doodle(doodle: Doodle, library_dir=None, use_builtin: bool = True, p
     user = load_library(library_dir) if library_dir else None
     library = combine(builtin_library() if use_builtin else None, user)
     clips = load_clips(library)
-    idle = clips.get("Idle")
     scale = CHARACTER_HEIGHT / PROP_SIZE if scale is None else scale
     results = []
     recognised = recognize(doodle, actions, params, threshold)
     duration = float(doodle.t[-1])
     times = np.arange(int(np.floor(duration * fps)) + 1) / fps
-    skeleton = None
+    skeleton, rest = _compile_skeleton(library, user, clips)
     for track in doodle.tracks:
         tokens, segments = recognised[track.name]
         spans, placed, used = [], [], {}
         for seg in segments:
-            name = seg.action if seg.action in clips else "Idle"
-            if name not in clips:
-                raise DoodleError(f"{library.source}: action {seg.action!r} has no clip (and there is no Idle clip)")
-            clip = clips[name][0]
-            action = library.action(name)
-            if skeleton is None:
-                skeleton = clip.motion.skeleton
-            elif clip.motion.skeleton.names != skeleton.names:
-                raise DoodleError(f"{clip.path}: clips of one compile must share a skeleton")
+            on_skeleton = [c for c in clips.get(seg.action, []) if c.motion.skeleton.names == skeleton.names]
+            clip = on_skeleton[0] if on_skeleton else rest
+            name = seg.action if seg.action in library.names else "Idle"
+            action = library.action(name) if name in library.names else library.action(rest.action)
             n = clip.motion.frames
             b = clip.stages.bounds()
             execution = (b["execution"][0] / max(n - 1, 1), b["execution"][1] / max(n - 1, 1))
@@ -93,7 +88,7 @@ def compile_doodle(doodle: Doodle, library_dir=None, use_builtin: bool = True, p
                         seg.start, seg.end, action.in_place, action.jumping, action.cyclic, execution)
             spans.append(span)
             placed.append((span, clip))
-            used[seg.action] = clip.path
+            used[seg.action] = clip.path if on_skeleton else None
         path, heading = world_path(track.t, track.p, spans, scale)
         frame_path = np.column_stack([np.interp(times, track.t, path[:, k]) for k in range(3)])
         frame_heading = np.interp(times, track.t, heading)
@@ -109,13 +104,39 @@ def compile_doodle(doodle: Doodle, library_dir=None, use_builtin: bool = True, p
                 cycles = max((span.t1 - span.t0) / clip.motion.duration, 1.0)
             pieces.append(Placed(span, clip.motion, clip.roles["pelvis"], cycles))
         motion, transitions = sequence(pieces, times, frame_path[:, [0, 2]], frame_heading, skeleton, fps)
-        results.append(Compiled(track.name, motion, segments, tokens, frame_path, transitions, used))
+        results.append(Compiled(track.name, motion, segments, tokens, frame_path, transitions, used, rest.roles))
     return results
 
 
-def quality(result: Compiled, roles: dict) -> dict:
+def _compile_skeleton(library, user, clips):
+    """The skeleton of the output (the user library's clips' when it has any, else the
+    built-in humanoid) and a rest-pose clip on it, played for actions that have no clip
+    on that skeleton (held first frame of its Idle, or of its first clip)."""
+    from dataclasses import replace as _replace
+
+    from retarget.analysis import Stages
+
+    mine = [c for a in (user.actions if user else ()) for c in clips.get(a.name, [])]
+    pool = mine or [c for found in clips.values() for c in found]
+    if not pool:
+        raise DoodleError(f"{library.source}: no action has a clip to animate")
+    skeleton = pool[0].motion.skeleton
+    same = [c for c in pool if c.motion.skeleton.names == skeleton.names]
+    base = next((c for c in same if c.action == "Idle"), same[0])
+    if base.action == "Idle":
+        return skeleton, base
+    still = base.motion.slice(0, 1)
+    still = _replace(still, translations=np.repeat(still.translations, 2, axis=0),
+                     rotations=np.repeat(still.rotations, 2, axis=0))
+    rest = _replace(base, motion=still, stages=Stages(0, 0, 1, 1, 2), cycle_length=None,
+                    contacts=np.ones((2, 2), dtype=bool))
+    return skeleton, rest
+
+
+def quality(result: Compiled) -> dict:
     """Report metrics: foot skating, ground penetration, root deviation from the path,
     transition smoothness."""
+    roles = result.roles
     from retarget.analysis import foot_contacts
     from retarget.skeleton import end_site_positions, forward_kinematics
 

@@ -65,6 +65,7 @@ class ActionDef:
     clips: tuple[str, ...] = ()  # absolute paths of BVH clips
     stages: tuple[int, ...] | None = None  # frames ending the first four stages
     cycle_length: float | None = None  # metres per cycle
+    roles: dict = field(default_factory=dict)  # its library's [skeleton] table: role -> joint name
 
 
 @dataclass(frozen=True)
@@ -135,6 +136,7 @@ def load_library(location) -> Library:
         if not isinstance(joint, str) or not joint:
             raise DoodleError(f"{path}: skeleton.{role}: expected a joint name, got {joint!r}")
     interactions = tuple(_interaction(e, i, path, seen) for i, e in enumerate(data.get("interactions", []), 1))
+    actions = [replace(a, roles=dict(roles)) for a in actions]
     return Library(head["name"], tuple(actions), str(path), dict(roles), interactions)
 
 

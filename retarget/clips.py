@@ -43,7 +43,7 @@ def resolve_roles(motion: Motion, named: dict, where: str) -> dict[str, int]:
 def load_clip(library: Library, action: ActionDef, path: str) -> Clip:
     where = f"{action.source or library.source}: action {action.name!r}"
     motion = read_bvh(path)
-    roles = resolve_roles(motion, library.roles, where)
+    roles = resolve_roles(motion, action.roles, where)
     if action.stages is not None:
         if action.stages[-1] > motion.frames:
             raise DoodleError(f"{where}: field 'stages': frame {action.stages[-1]} is past the clip's "

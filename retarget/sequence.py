@@ -67,17 +67,33 @@ def pose_at(placed: Placed, t: np.ndarray, path_xz: np.ndarray, heading: np.ndar
     """Local translations (F, J, 3) and rotations (F, J, 4) of the clip placed on the path."""
     trans, rots = _sample(placed.motion, clip_time(placed, t))
     p = placed.pelvis
+    parents = placed.motion.skeleton.parents
     yaw = Rotation.from_rotvec(np.outer(heading, [0.0, 1.0, 0.0]))
     # the pelvis carries the character: its horizontal position follows the path, its
-    # height and tilt come from the clip; the clip's own travel is replaced
+    # height and tilt come from the clip; the clip's own travel is replaced (in-place
+    # actions keep their sway around the spot)
     rest_xz = placed.motion.translations[0, p, [0, 2]]
-    local = trans[:, p].copy()
-    sway = local[:, [0, 2]] - rest_xz if placed.span.in_place else 0.0 * local[:, [0, 2]]
+    local = trans[:, p]
+    sway = local[:, [0, 2]] - rest_xz if placed.span.in_place else np.zeros((len(t), 2))
     sway3 = np.column_stack([sway[:, 0], np.zeros(len(t)), sway[:, 1]])
-    moved = yaw.apply(sway3)
-    trans[:, p, 0] = path_xz[:, 0] + moved[:, 0]
-    trans[:, p, 2] = path_xz[:, 1] + moved[:, 2]
-    rots[:, p] = (yaw * Rotation.from_quat(rots[:, p])).as_quat()
+    ground = np.column_stack([path_xz[:, 0], np.zeros(len(t)), path_xz[:, 1]])
+    if parents[p] < 0:  # the pelvis is the root: it takes the path and the heading
+        moved = yaw.apply(sway3)
+        trans[:, p, 0] = ground[:, 0] + moved[:, 0]
+        trans[:, p, 2] = ground[:, 2] + moved[:, 2]
+        rots[:, p] = (yaw * Rotation.from_quat(rots[:, p])).as_quat()
+        return trans, rots
+    # helper joints above the pelvis (Bandai's joint_Root): the top one takes the path and
+    # the heading, the others are neutral, the pelvis keeps its height, tilt and sway
+    a = parents[p]
+    while a >= 0:
+        trans[:, a] = 0.0
+        rots[:, a] = (0.0, 0.0, 0.0, 1.0)
+        a = parents[a]
+    trans[:, 0] = ground
+    rots[:, 0] = yaw.as_quat()
+    trans[:, p, 0] = sway3[:, 0]
+    trans[:, p, 2] = sway3[:, 2]
     return trans, rots
 
 

@@ -85,3 +85,27 @@ def test_a_failed_compile_leaves_existing_output(tmp_path, capsys):
     assert main(["compile", str(bad), "-o", str(out)]) == 1
     assert "bad.doodle" in capsys.readouterr().err
     assert (out / "report.json").read_text() == before
+
+
+def test_compile_with_a_library_imported_from_bandai(tmp_path, capsys):
+    """Bandai's skeleton (a joint_Root above the Hips, centimetres) drives the output; actions
+    Bandai has no clip for hold its rest pose; the walk still travels the doodle."""
+    bandai = ROOT.parent / "shared" / "data" / "mocap" / "bandai" / "dataset-1"
+    if not bandai.exists():
+        pytest.skip("Bandai data not found")
+    lib = tmp_path / "bandai"
+    assert main(["library", "import", str(bandai), "--name", "bandai", "--include", "*_walk*_normal_*",
+                 "-o", str(lib)]) == 0
+    out = tmp_path / "out"
+    assert main(["compile", str(DEMO), "--library", str(lib), "-o", str(out)]) == 0
+    report = json.loads((out / "report.json").read_text())
+    segs = report["tracks"]["c0"]["segments"]
+    assert [s["action"] for s in segs] == FIG_4_7
+    assert all(s["clip"] and "bandai" in s["clip"] for s in segs if "Walk" in s["action"])
+    assert all(s["clip"] is None for s in segs if s["action"] in ("Jump", "Stomp"))
+    motion = read_bvh(out / "c0.bvh")
+    assert motion.skeleton.names[:2] == ("joint_Root", "Hips")
+    hips = forward_kinematics(motion)[0][:, 1]
+    walk = next(s for s in segs if s["action"] == "Walk")
+    a, b = int(round(walk["start"] * 30)), int(round(walk["end"] * 30))
+    assert np.linalg.norm(hips[b, [0, 2]] - hips[a, [0, 2]]) > 0.5
