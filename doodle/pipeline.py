@@ -55,8 +55,12 @@ class Compiled:
 
 
 def compile_doodle(doodle: Doodle, library_dir=None, use_builtin: bool = True, params: SegmenterParams = SegmenterParams(),
-                   fps: float = 30.0, scale: float | None = None, threshold: float = 2.0) -> list[Compiled]:
-    """Every track of a doodle turned into an animation on one timeline."""
+                   fps: float = 30.0, scale: float | None = None, threshold: float = 2.0,
+                   pin: bool = True) -> list[Compiled]:
+    """Every track of a doodle turned into an animation on one timeline (feet pinned in
+    their contacts unless ``pin`` is False)."""
+    from retarget.feet import clamp_to_ground, pin_feet
+
     from library.manifest import builtin as builtin_library
     from library.manifest import combine
     from retarget.clips import load_clips
@@ -93,17 +97,24 @@ def compile_doodle(doodle: Doodle, library_dir=None, use_builtin: bool = True, p
         frame_path = np.column_stack([np.interp(times, track.t, path[:, k]) for k in range(3)])
         frame_heading = np.interp(times, track.t, heading)
         pieces = []
+        step = np.linalg.norm(np.diff(frame_path[:, [0, 2]], axis=0), axis=1)
         for span, clip in placed:
-            cycles = 0.0
-            if span.cyclic and clip.cycle_length:
-                seg_path = path[span.i0:span.i1]
-                length = float(np.sum(np.linalg.norm(np.diff(seg_path[:, [0, 2]], axis=0), axis=1)))
-                cycles = max(length / clip.cycle_length, 1.0) if length > 0 else max(
-                    (span.t1 - span.t0) / clip.motion.duration, 1.0)
-            elif span.cyclic:
+            cycles, progress = 0.0, None
+            if span.cyclic:
                 cycles = max((span.t1 - span.t0) / clip.motion.duration, 1.0)
-            pieces.append(Placed(span, clip.motion, clip.roles["pelvis"], cycles))
+                if not span.in_place and clip.cycle_length:
+                    inside = (times[1:] > span.t0) & (times[1:] <= span.t1)
+                    progress = np.concatenate([[0.0], np.cumsum(np.where(inside, step, 0.0))])
+            pelvis = clip.roles["pelvis"]
+            from retarget.skeleton import forward_kinematics as _fk
+
+            hips = _fk(clip.motion)[0][:, pelvis][:, [0, 2]]
+            travels = not span.in_place and float(np.linalg.norm(hips[-1] - hips[0])) > 0.2
+            pieces.append(Placed(span, clip.motion, pelvis, cycles, times, progress if travels else None, travels))
         motion, transitions = sequence(pieces, times, frame_path[:, [0, 2]], frame_heading, skeleton, fps)
+        if pin:
+            motion = pin_feet(motion, [rest.roles["left_foot"], rest.roles["right_foot"]])
+        motion = clamp_to_ground(motion)
         results.append(Compiled(track.name, motion, segments, tokens, frame_path, transitions, used, rest.roles))
     return results
 
@@ -137,14 +148,14 @@ def quality(result: Compiled) -> dict:
     """Report metrics: foot skating, ground penetration, root deviation from the path,
     transition smoothness."""
     roles = result.roles
-    from retarget.analysis import foot_contacts
+    from retarget.feet import planted
     from retarget.skeleton import end_site_positions, forward_kinematics
 
     motion = result.motion
     world = forward_kinematics(motion)
     positions = world[0]
     feet = [roles["left_foot"], roles["right_foot"]]
-    contacts = foot_contacts(motion, feet, world=positions)
+    contacts = planted(motion, feet, positions)
     vel = np.linalg.norm(np.gradient(positions[:, feet][:, :, [0, 2]], motion.frame_time, axis=0), axis=2)
     skating = float(vel[contacts].mean()) if contacts.any() else 0.0
     ends = end_site_positions(motion, world)

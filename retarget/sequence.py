@@ -25,12 +25,32 @@ from retarget.trajectory import Span
 
 @dataclass(frozen=True, eq=False)
 class Placed:
-    """A clip assigned to a span: ``cycles`` > 0 for cyclic playback."""
+    """A clip assigned to a span: ``cycles`` > 0 for cyclic playback; a travelling cyclic
+    clip is driven by distance instead (``progress``: arc length along the path at the
+    output times, ``times``), so its planted foot stays planted."""
 
     span: Span
     motion: Motion
     pelvis: int
     cycles: float = 0.0
+    times: np.ndarray | None = None
+    progress: np.ndarray | None = None
+    travels: bool = False  # the clip moves the character (walks, jumps); else it acts on the spot
+
+
+def travel_curve(motion: Motion, pelvis: int) -> np.ndarray:
+    """Distance (m) the pelvis has travelled at each frame of a cyclic clip, along its net
+    direction of travel, made non-decreasing."""
+    xz = motion.translations[:, pelvis][:, [0, 2]] if motion.skeleton.parents[pelvis] < 0 else None
+    if xz is None:
+        from retarget.skeleton import forward_kinematics
+
+        xz = forward_kinematics(motion)[0][:, pelvis][:, [0, 2]]
+    net = xz[-1] - xz[0]
+    norm = np.linalg.norm(net)
+    if norm < 1e-6:
+        return np.zeros(motion.frames)
+    return np.maximum.accumulate((xz - xz[0]) @ (net / norm))
 
 
 def _sample(motion: Motion, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -56,6 +76,14 @@ def clip_time(placed: Placed, t: np.ndarray) -> np.ndarray:
     """Clip time for doodle times ``t`` inside (or clamped to) the span."""
     s, m = placed.span, placed.motion
     u = np.clip((t - s.t0) / max(s.t1 - s.t0, 1e-9), 0.0, 1.0)
+    if placed.progress is not None:
+        curve = travel_curve(m, placed.pelvis)
+        length = curve[-1]
+        if length > 1e-6:
+            s_t = np.interp(t, placed.times, placed.progress)
+            rem = np.mod(s_t, length)
+            clip_times = np.arange(m.frames) * m.frame_time
+            return np.interp(rem, curve, clip_times)
     if placed.cycles > 0:
         cycle = (m.frames - 1) * m.frame_time
         phase = u * placed.cycles
@@ -74,7 +102,11 @@ def pose_at(placed: Placed, t: np.ndarray, path_xz: np.ndarray, heading: np.ndar
     # actions keep their sway around the spot)
     rest_xz = placed.motion.translations[0, p, [0, 2]]
     local = trans[:, p]
-    sway = local[:, [0, 2]] - rest_xz if placed.span.in_place else np.zeros((len(t), 2))
+    sway = local[:, [0, 2]] - rest_xz
+    if placed.travels:  # travel along the clip's direction is the path's; sideways sway stays
+        net = placed.motion.translations[-1, p, [0, 2]] - rest_xz
+        along = net / max(np.linalg.norm(net), 1e-9)
+        sway = sway - np.outer(sway @ along, along)
     sway3 = np.column_stack([sway[:, 0], np.zeros(len(t)), sway[:, 1]])
     ground = np.column_stack([path_xz[:, 0], np.zeros(len(t)), path_xz[:, 1]])
     if parents[p] < 0:  # the pelvis is the root: it takes the path and the heading

@@ -56,7 +56,7 @@ def world_path(t: np.ndarray, p: np.ndarray, spans: list[Span], scale: float) ->
             offset -= moved
         elif s.jumping:
             path[seg] = _retimed_jump(t[seg], path[seg], s)
-    heading = _heading(path, spans)
+    heading = _heading(t, path, spans)
     return path, heading
 
 
@@ -73,11 +73,16 @@ def _retimed_jump(t: np.ndarray, points: np.ndarray, span: Span) -> np.ndarray:
     return points[k] * (1 - f) + points[k + 1] * f
 
 
-def _heading(path: np.ndarray, spans: list[Span]) -> np.ndarray:
+TURNING_SPEED = 0.3  # m/s: slower drift of the path (a hand at rest) does not turn the character
+
+
+def _heading(t: np.ndarray, path: np.ndarray, spans: list[Span]) -> np.ndarray:
     n = len(path)
-    step = np.gradient(gaussian_filter1d(path, 3.0, axis=0, mode="nearest"), axis=0) if n > 1 else np.zeros((n, 3))
+    if n < 2:
+        return np.zeros(n)
+    step = np.gradient(gaussian_filter1d(path, 3.0, axis=0, mode="nearest"), t, axis=0)
     speed = np.hypot(step[:, 0], step[:, 2])
-    moving = speed > 1e-4
+    moving = speed > TURNING_SPEED
     for s in spans:  # in place and sidesteps keep the heading; walking back faces away from travel
         if s.in_place or "Side Walk" in s.action:
             moving[s.i0:s.i1] = False
