@@ -2,7 +2,7 @@
 
 import sys
 
-from bench import bvh_speed, matcher_speed, real_gestures, segmenter_speed, stages_accuracy
+from bench import bvh_speed, matcher_speed, real_gestures, segmenter_speed, stages_accuracy, terrain_speed
 
 
 def main() -> int:
@@ -16,6 +16,8 @@ def main() -> int:
     bvh_speed.main()
     print()
     stages_accuracy.main()
+    print()
+    terrain_speed.main()
     return 0
 
 

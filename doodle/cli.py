@@ -141,13 +141,18 @@ def cmd_compile(args) -> int:
     from doodle.pipeline import compile_doodle, quality
     from retarget.bvh import write_bvh
 
+    from retarget.terrain import parse_terrain
+
     params, mounts = _params(args)
+    terrain = parse_terrain(args.terrain) if args.terrain else None
     doodle = _load(args.file, args, mounts)
-    results = compile_doodle(doodle, args.library, not args.no_builtin, params, args.fps, args.scale, args.threshold)
+    results = compile_doodle(doodle, args.library, not args.no_builtin, params, args.fps, args.scale, args.threshold,
+                             not args.no_foot_pinning, terrain)
     out = Path(args.output)
     out.mkdir(parents=True, exist_ok=True)
     seconds = _seconds(doodle)
-    report = {"file": str(args.file), "fps": args.fps, "duration_s": round(float(doodle.t[-1]), 6), "tracks": {}}
+    report = {"file": str(args.file), "fps": args.fps, "duration_s": round(float(doodle.t[-1]), 6),
+              "terrain": args.terrain or "flat", "tracks": {}}
     for r in results:
         bvh = out / f"{r.track}.bvh"
         write_bvh(bvh, r.motion)
@@ -342,6 +347,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--fps", type=float, default=30.0, help="output frame rate (default 30)")
     p.add_argument("--scale", type=float, help="doodle-to-world scale (default 8.5: a 20 cm prop, a 1.7 m character)")
     p.add_argument("--threshold", type=float, default=2.0, help="edit-distance threshold of approximate matches")
+    p.add_argument("--terrain", metavar="SPEC", help="flat[:H], jacksboro[:SIZE], s1045[:SIZE], "
+                   "heightfield:FILE.npz[:SPACING] or mesh:FILE.obj|ply|glb (default flat)")
+    p.add_argument("--no-foot-pinning", action="store_true", help="leave feet as the blended clips put them")
     _segmenter_options(p)
     p.set_defaults(run=cmd_compile)
 

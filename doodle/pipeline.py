@@ -52,11 +52,12 @@ class Compiled:
     transitions: list[float]
     clips: dict  # action -> clip path
     roles: dict  # role -> joint index on the output skeleton
+    terrain: object = None  # retarget.terrain ground (None: flat y = 0)
 
 
 def compile_doodle(doodle: Doodle, library_dir=None, use_builtin: bool = True, params: SegmenterParams = SegmenterParams(),
                    fps: float = 30.0, scale: float | None = None, threshold: float = 2.0,
-                   pin: bool = True) -> list[Compiled]:
+                   pin: bool = True, terrain=None) -> list[Compiled]:
     """Every track of a doodle turned into an animation on one timeline (feet pinned in
     their contacts unless ``pin`` is False)."""
     from retarget.feet import clamp_to_ground, pin_feet
@@ -93,7 +94,7 @@ def compile_doodle(doodle: Doodle, library_dir=None, use_builtin: bool = True, p
             spans.append(span)
             placed.append((span, clip))
             used[seg.action] = clip.path if on_skeleton else None
-        path, heading = world_path(track.t, track.p, spans, scale)
+        path, heading = world_path(track.t, track.p, spans, scale, terrain)
         frame_path = np.column_stack([np.interp(times, track.t, path[:, k]) for k in range(3)])
         frame_heading = np.interp(times, track.t, heading)
         pieces = []
@@ -111,11 +112,13 @@ def compile_doodle(doodle: Doodle, library_dir=None, use_builtin: bool = True, p
             hips = _fk(clip.motion)[0][:, pelvis][:, [0, 2]]
             travels = not span.in_place and float(np.linalg.norm(hips[-1] - hips[0])) > 0.2
             pieces.append(Placed(span, clip.motion, pelvis, cycles, times, progress if travels else None, travels))
-        motion, transitions = sequence(pieces, times, frame_path[:, [0, 2]], frame_heading, skeleton, fps)
+        motion, transitions = sequence(pieces, times, frame_path[:, [0, 2]], frame_heading, skeleton, fps,
+                                       ground_y=frame_path[:, 1])
         if pin:
-            motion = pin_feet(motion, [rest.roles["left_foot"], rest.roles["right_foot"]])
-        motion = clamp_to_ground(motion)
-        results.append(Compiled(track.name, motion, segments, tokens, frame_path, transitions, used, rest.roles))
+            motion = pin_feet(motion, [rest.roles["left_foot"], rest.roles["right_foot"]], terrain=terrain)
+        motion = clamp_to_ground(motion, terrain)
+        results.append(Compiled(track.name, motion, segments, tokens, frame_path, transitions, used, rest.roles,
+                                terrain))
     return results
 
 
@@ -155,11 +158,13 @@ def quality(result: Compiled) -> dict:
     world = forward_kinematics(motion)
     positions = world[0]
     feet = [roles["left_foot"], roles["right_foot"]]
-    contacts = planted(motion, feet, positions)
+    contacts = planted(motion, feet, positions, result.terrain)
     vel = np.linalg.norm(np.gradient(positions[:, feet][:, :, [0, 2]], motion.frame_time, axis=0), axis=2)
     skating = float(vel[contacts].mean()) if contacts.any() else 0.0
     ends = end_site_positions(motion, world)
-    lowest = min([float(positions[..., 1].min())] + [float(e[:, 1].min()) for e in ends.values()])
+    points = np.concatenate([positions] + [e[:, None] for e in ends.values()], axis=1)
+    ground = 0.0 if result.terrain is None else result.terrain.height(points[:, :, [0, 2]])
+    lowest = float(np.min(points[:, :, 1] - ground))
     pelvis = positions[:, roles["pelvis"]]
     deviation = float(np.mean(np.linalg.norm(pelvis[:, [0, 2]] - result.path[:, [0, 2]], axis=1)))
     acc = np.linalg.norm(np.diff(positions, n=2, axis=0), axis=2).max(axis=1) / motion.frame_time ** 2

@@ -75,15 +75,23 @@ def _intervals(mask: np.ndarray) -> list[tuple[int, int]]:
 CONTACT_SPEED = 1.0  # m/s: a planted foot, even sliding, moves slower than a stepping one
 
 
-def planted(motion: Motion, feet: list[int], positions: np.ndarray | None = None) -> np.ndarray:
-    """(F, len(feet)) bool: each foot near its lowest height and under CONTACT_SPEED."""
-    return foot_contacts(motion, feet, speed=CONTACT_SPEED, world=positions)
+def planted(motion: Motion, feet: list[int], positions: np.ndarray | None = None, terrain=None,
+            height: float = 0.03) -> np.ndarray:
+    """(F, len(feet)) bool: each foot near its lowest height above the ground and under
+    CONTACT_SPEED."""
+    positions = forward_kinematics(motion)[0] if positions is None else positions
+    if terrain is None:
+        return foot_contacts(motion, feet, speed=CONTACT_SPEED, world=positions)
+    foot = positions[:, feet]
+    above = foot[:, :, 1] - terrain.height(foot[:, :, [0, 2]])
+    speed = np.linalg.norm(np.gradient(foot, motion.frame_time, axis=0), axis=2)
+    return (above - above.min(axis=0) <= height) & (speed <= CONTACT_SPEED)
 
 
-def pin_feet(motion: Motion, feet: list[int], fade: int = 3) -> Motion:
+def pin_feet(motion: Motion, feet: list[int], fade: int = 3, terrain=None) -> Motion:
     """The motion with each foot held still over each of its contact intervals."""
     original = forward_kinematics(motion)[0]
-    contacts = planted(motion, feet, original)
+    contacts = planted(motion, feet, original, terrain)
     for k, ankle in enumerate(feet):
         knee = int(motion.skeleton.parents[ankle])
         hip = int(motion.skeleton.parents[knee])
@@ -109,18 +117,18 @@ def pin_feet(motion: Motion, feet: list[int], fade: int = 3) -> Motion:
     return motion
 
 
-def clamp_to_ground(motion: Motion, ground: float = 0.0) -> Motion:
-    """The motion raised, frame by frame, so no joint or End Site is below ``ground``
-    (the lift is eased in and out over a few frames)."""
+def clamp_to_ground(motion: Motion, terrain=None) -> Motion:
+    """The motion raised, frame by frame, so no joint or End Site is below the ground
+    (``terrain``; flat y = 0 when None); the lift is eased in and out over a few frames."""
     from scipy.ndimage import gaussian_filter1d, maximum_filter1d
 
     from retarget.skeleton import end_site_positions
 
     world = forward_kinematics(motion)
-    lowest = world[0][..., 1].min(axis=1)
-    for end in end_site_positions(motion, world).values():
-        lowest = np.minimum(lowest, end[:, 1])
-    lift = np.maximum(0.0, ground - lowest)
+    points = [world[0]] + [end[:, None] for end in end_site_positions(motion, world).values()]
+    points = np.concatenate(points, axis=1)
+    ground = 0.0 if terrain is None else terrain.height(points[:, :, [0, 2]])
+    lift = np.maximum(0.0, np.max(ground - points[:, :, 1], axis=1))
     if not lift.any():
         return motion
     lift = np.maximum(gaussian_filter1d(maximum_filter1d(lift, 5), 1.5), lift)

@@ -91,7 +91,8 @@ def clip_time(placed: Placed, t: np.ndarray) -> np.ndarray:
     return u * (m.frames - 1) * m.frame_time
 
 
-def pose_at(placed: Placed, t: np.ndarray, path_xz: np.ndarray, heading: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def pose_at(placed: Placed, t: np.ndarray, path_xz: np.ndarray, heading: np.ndarray,
+            ground_y: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Local translations (F, J, 3) and rotations (F, J, 4) of the clip placed on the path."""
     trans, rots = _sample(placed.motion, clip_time(placed, t))
     p = placed.pelvis
@@ -108,10 +109,12 @@ def pose_at(placed: Placed, t: np.ndarray, path_xz: np.ndarray, heading: np.ndar
         along = net / max(np.linalg.norm(net), 1e-9)
         sway = sway - np.outer(sway @ along, along)
     sway3 = np.column_stack([sway[:, 0], np.zeros(len(t)), sway[:, 1]])
-    ground = np.column_stack([path_xz[:, 0], np.zeros(len(t)), path_xz[:, 1]])
+    lift = np.zeros(len(t)) if ground_y is None else ground_y
+    ground = np.column_stack([path_xz[:, 0], lift, path_xz[:, 1]])
     if parents[p] < 0:  # the pelvis is the root: it takes the path and the heading
         moved = yaw.apply(sway3)
         trans[:, p, 0] = ground[:, 0] + moved[:, 0]
+        trans[:, p, 1] += lift
         trans[:, p, 2] = ground[:, 2] + moved[:, 2]
         rots[:, p] = (yaw * Rotation.from_quat(rots[:, p])).as_quat()
         return trans, rots
@@ -130,7 +133,8 @@ def pose_at(placed: Placed, t: np.ndarray, path_xz: np.ndarray, heading: np.ndar
 
 
 def sequence(placed: list[Placed], times: np.ndarray, path_xz: np.ndarray, heading: np.ndarray,
-             skeleton: Skeleton, fps: float, blend: float = 0.2) -> tuple[Motion, list[float]]:
+             skeleton: Skeleton, fps: float, blend: float = 0.2,
+             ground_y: np.ndarray | None = None) -> tuple[Motion, list[float]]:
     """The whole timeline at ``fps``; returns the motion and the transition times."""
     frames = len(times)
     j = len(skeleton)
@@ -155,7 +159,7 @@ def sequence(placed: list[Placed], times: np.ndarray, path_xz: np.ndarray, headi
             w *= _smoothstep((tt - (pl.span.t0 - blend / 2)) / blend)
         if k < len(placed) - 1:
             w *= 1.0 - _smoothstep((tt - (pl.span.t1 - blend / 2)) / blend)
-        tr, ro = pose_at(pl, tt, path_xz[idx], heading[idx])
+        tr, ro = pose_at(pl, tt, path_xz[idx], heading[idx], None if ground_y is None else ground_y[idx])
         first = weight[idx] == 0
         trans[idx] += tr * w[:, None, None]
         prev = rots[idx]

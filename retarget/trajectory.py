@@ -14,8 +14,8 @@ For each action segment, in order:
 5. the heading follows the path's direction while the character travels and is held
    while it acts in place.
 
-This first version projects on flat ground; height fields and meshes come with the
-terrain work (issue 5).
+The ground is any :mod:`retarget.terrain` (flat, height field, mesh): the path's height is
+the ground's under it (a ray cast along gravity).
 """
 
 from __future__ import annotations
@@ -41,8 +41,10 @@ class Span:
     execution: tuple[float, float] = (0.0, 1.0)  # execution stage as fractions of the clip
 
 
-def world_path(t: np.ndarray, p: np.ndarray, spans: list[Span], scale: float) -> tuple[np.ndarray, np.ndarray]:
-    """Ground path (n, 3) of the root and heading (n,) in radians about +y (0 faces +z)."""
+def world_path(t: np.ndarray, p: np.ndarray, spans: list[Span], scale: float,
+               terrain=None) -> tuple[np.ndarray, np.ndarray]:
+    """Ground path (n, 3) of the root — on ``terrain`` (flat y = 0 when None), cast along
+    gravity — and heading (n,) in radians about +y (0 faces +z)."""
     ground = (p - p[0]) * scale
     ground[:, 1] = 0.0
     path = ground.copy()
@@ -57,6 +59,8 @@ def world_path(t: np.ndarray, p: np.ndarray, spans: list[Span], scale: float) ->
         elif s.jumping:
             path[seg] = _retimed_jump(t[seg], path[seg], s)
     heading = _heading(t, path, spans)
+    if terrain is not None:
+        path[:, 1] = terrain.height(path[:, [0, 2]])
     return path, heading
 
 

@@ -136,3 +136,29 @@ def test_feet_are_pinned_and_above_the_ground():
     pinned = quality(compile_doodle(doodle)[0])
     assert pinned["foot_skating_m_per_s"] < 0.05 < loose["foot_skating_m_per_s"]
     assert pinned["ground_penetration_m"] == 0.0
+
+
+def test_compile_on_an_elevation_grid(tmp_path):
+    """On matplotlib's Jacksboro elevation grid the character walks the doodle over the
+    relief: hips a body's height above the ground under them, nothing under the ground."""
+    from retarget.terrain import parse_terrain
+
+    out = tmp_path / "out"
+    assert main(["compile", str(DEMO), "--terrain", "jacksboro", "-o", str(out)]) == 0
+    report = json.loads((out / "report.json").read_text())
+    assert report["terrain"] == "jacksboro"
+    assert [s["action"] for s in report["tracks"]["c0"]["segments"]] == FIG_4_7
+    assert report["tracks"]["c0"]["metrics"]["ground_penetration_m"] == 0.0
+    motion = read_bvh(out / "c0.bvh", unit=1.0)
+    hips = forward_kinematics(motion)[0][:, 0]
+    ground = parse_terrain("jacksboro").height(hips[:, [0, 2]])
+    assert np.ptp(ground) > 0.5  # the relief is really there
+    above = hips[:, 1] - ground
+    assert 0.7 < above.min() and above.max() < 1.9  # (the jump rises)
+
+
+def test_bad_terrain_spec_is_one_line(tmp_path, capsys):
+    assert main(["compile", str(DEMO), "--terrain", "mesh:" + str(tmp_path / "none.obj"), "-o",
+                 str(tmp_path / "o")]) == 1
+    err = capsys.readouterr().err
+    assert err.startswith("doodle: error:") and "none.obj" in err
