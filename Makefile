@@ -19,7 +19,7 @@ $(VENV)/.installed-test: pyproject.toml $(VENV)/.installed
 demo: $(VENV)/.installed
 	$(BIN)/doodle tokens examples/demo.doodle
 	$(BIN)/doodle recognize -v examples/demo.doodle
-	$(BIN)/doodle compile examples/demo.doodle -o out/demo
+	$(BIN)/doodle compile examples/demo.doodle -o out/demo --preview
 
 test: $(VENV)/.installed-test
 	$(BIN)/python -m pytest

@@ -164,6 +164,11 @@ def cmd_compile(args) -> int:
             "transitions": [round(b, 6) for b in r.transitions],
             "metrics": quality(r),
         }
+    if args.preview:
+        from retarget.preview import keyframes, plan_view
+
+        report["preview"] = [str(plan_view(results, {r.track: r.projected for r in results}, out / "plan.png")),
+                             str(keyframes(results, out / "keyframes.png"))]
     atomic_write(out / "report.json", [json.dumps(report, indent=2) + "\n"])
     for name, tr in report["tracks"].items():
         m = tr["metrics"]
@@ -171,7 +176,7 @@ def cmd_compile(args) -> int:
               f"{', '.join(s['action'] for s in tr['segments'])}")
         print(f"  foot skating {m['foot_skating_m_per_s']} m/s, ground penetration {m['ground_penetration_m']} m, "
               f"root deviation {m['root_deviation_m']} m, transition smoothness {m['transition_smoothness']}")
-    print(f"{out / 'report.json'}")
+    print(f"{out / 'report.json'}" + (f"; preview: {', '.join(report['preview'])}" if args.preview else ""))
     return 0
 
 
@@ -350,6 +355,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--terrain", metavar="SPEC", help="flat[:H], jacksboro[:SIZE], s1045[:SIZE], "
                    "heightfield:FILE.npz[:SPACING] or mesh:FILE.obj|ply|glb (default flat)")
     p.add_argument("--no-foot-pinning", action="store_true", help="leave feet as the blended clips put them")
+    p.add_argument("--preview", action="store_true", help="also draw plan.png (paths) and keyframes.png (poses)")
     _segmenter_options(p)
     p.set_defaults(run=cmd_compile)
 

@@ -53,6 +53,8 @@ class Compiled:
     clips: dict  # action -> clip path
     roles: dict  # role -> joint index on the output skeleton
     terrain: object = None  # retarget.terrain ground (None: flat y = 0)
+    frame_ranges: list = None  # per segment, its first and last output frame
+    projected: np.ndarray = None  # the doodle scaled and projected, before the transfer (n, 3)
 
 
 def compile_doodle(doodle: Doodle, library_dir=None, use_builtin: bool = True, params: SegmenterParams = SegmenterParams(),
@@ -117,8 +119,12 @@ def compile_doodle(doodle: Doodle, library_dir=None, use_builtin: bool = True, p
         if pin:
             motion = pin_feet(motion, [rest.roles["left_foot"], rest.roles["right_foot"]], terrain=terrain)
         motion = clamp_to_ground(motion, terrain)
+        ranges = [(int(np.searchsorted(times, sp.t0)), int(min(np.searchsorted(times, sp.t1), len(times) - 1)))
+                  for sp in spans]
+        projected = (track.p - track.p[0]) * scale
+        projected[:, 1] = 0.0 if terrain is None else terrain.height(projected[:, [0, 2]])
         results.append(Compiled(track.name, motion, segments, tokens, frame_path, transitions, used, rest.roles,
-                                terrain))
+                                terrain, ranges, projected))
     return results
 
 

@@ -162,3 +162,19 @@ def test_bad_terrain_spec_is_one_line(tmp_path, capsys):
                  str(tmp_path / "o")]) == 1
     err = capsys.readouterr().err
     assert err.startswith("doodle: error:") and "none.obj" in err
+
+
+def test_preview_images(tmp_path):
+    import matplotlib.image as mpimg
+
+    out = tmp_path / "out"
+    assert main(["compile", str(DEMO), "-o", str(out), "--preview"]) == 0
+    report = json.loads((out / "report.json").read_text())
+    assert sorted(Path(p).name for p in report["preview"]) == ["keyframes.png", "plan.png"]
+    for name in ("plan.png", "keyframes.png"):
+        image = mpimg.imread(out / name)[..., :3]
+        ink = (image.mean(axis=2) < 0.6).mean()
+        assert 0.002 < ink < 0.5, name  # drawn, not blank
+    # coloured segments in the plan view: more than the grey and black of axes and text
+    plan = mpimg.imread(out / "plan.png")[..., :3]
+    assert (np.ptp(plan, axis=2) > 0.3).mean() > 0.001

@@ -1,0 +1,74 @@
+"""Previews of a compiled animation: a plan view of the paths and a strip of key poses.
+
+* ``plan.png`` — seen from above (x to the right, z up the page): each track's root path,
+  coloured by action segment, over the projected doodle (grey) it was made from.
+* ``keyframes.png`` — per track, the character at the middle of every segment (side and
+  front views), labelled with the frame; see :func:`retarget.sheet.contact_sheet`.
+
+Needs matplotlib (Agg backend); files are written to a temporary name and renamed.
+"""
+
+from __future__ import annotations
+
+import os
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+from retarget.sheet import contact_sheet
+from retarget.skeleton import forward_kinematics
+
+
+def _atomic_png(path: Path, draw) -> None:
+    with tempfile.NamedTemporaryFile(suffix=".png", dir=path.parent, delete=False) as tmp:
+        pass
+    try:
+        draw(tmp.name)
+        os.replace(tmp.name, path)
+    finally:
+        if os.path.exists(tmp.name):
+            os.unlink(tmp.name)
+
+
+def plan_view(results, projected: dict, path) -> Path:
+    """Root paths by segment over each track's projected doodle (``projected[track]`` (n, 3))."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    path = Path(path)
+    fig, ax = plt.subplots(figsize=(6, 6))
+    colours = plt.get_cmap("tab20")
+    names = sorted({s.action for r in results for s in r.segments})
+    for r in results:
+        doodle = projected[r.track]
+        ax.plot(doodle[:, 0], doodle[:, 2], color="#bbbbbb", lw=1, ls="--")
+        hips = forward_kinematics(r.motion)[0][:, r.roles["pelvis"]]
+        times = np.arange(r.motion.frames) * r.motion.frame_time
+        for k, s in enumerate(r.segments):
+            a, b = r.frame_ranges[k]
+            colour = colours(names.index(s.action) % 20)
+            ax.plot(hips[a:b + 1, 0], hips[a:b + 1, 2], color=colour, lw=2.5,
+                    label=s.action if s.action not in ax.get_legend_handles_labels()[1] else None)
+        ax.plot(*hips[0, [0, 2]], "o", color="black", ms=5)
+        ax.annotate(r.track, hips[0, [0, 2]], textcoords="offset points", xytext=(4, 4), fontsize=8)
+    ax.set_aspect("equal")
+    ax.set_xlabel("x (m, the performer's left)")
+    ax.set_ylabel("z (m, forward)")
+    ax.legend(fontsize=7, loc="best")
+    ax.grid(alpha=0.3)
+    fig.tight_layout()
+    _atomic_png(path, lambda name: fig.savefig(name, dpi=100))
+    plt.close(fig)
+    return path
+
+
+def keyframes(results, path) -> Path:
+    """The character at the middle of each segment, one row per track."""
+    path = Path(path)
+    motions = {r.track: r.motion for r in results}
+    frames = {r.track: [int((a + b) // 2) for a, b in r.frame_ranges] for r in results}
+    _atomic_png(path, lambda name: contact_sheet(motions, name, frames=frames))
+    return path
