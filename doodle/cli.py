@@ -147,7 +147,7 @@ def cmd_compile(args) -> int:
     terrain = parse_terrain(args.terrain) if args.terrain else None
     doodle = _load(args.file, args, mounts)
     results = compile_doodle(doodle, args.library, not args.no_builtin, params, args.fps, args.scale, args.threshold,
-                             not args.no_foot_pinning, terrain)
+                             not args.no_foot_pinning, terrain, args.jump_arc)
     out = Path(args.output)
     out.mkdir(parents=True, exist_ok=True)
     seconds = _seconds(doodle)
@@ -355,6 +355,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--terrain", metavar="SPEC", help="flat[:H], jacksboro[:SIZE], s1045[:SIZE], "
                    "heightfield:FILE.npz[:SPACING] or mesh:FILE.obj|ply|glb (default flat)")
     p.add_argument("--no-foot-pinning", action="store_true", help="leave feet as the blended clips put them")
+    p.add_argument("--jump-arc", choices=["clip", "hermite", "apex"], default="clip",
+                   help="jump height from the clip (default), a Hermite arc (alpha 2.5), or one keeping the doodle's apex")
     p.add_argument("--preview", action="store_true", help="also draw plan.png (paths) and keyframes.png (poses)")
     _segmenter_options(p)
     p.set_defaults(run=cmd_compile)

@@ -1,6 +1,7 @@
 """The compile pipeline: the one place that ties doodle → grammar → (laban → retarget).
 
-Today it runs the front half: samples → tokens (Segmenter) → action segments (Matcher).
+Samples → tokens (Segmenter) → action segments (Matcher) → trajectory and clip sequence →
+one animation per track (:func:`compile_doodle`), with quality metrics (:func:`quality`).
 """
 
 from __future__ import annotations
@@ -59,7 +60,7 @@ class Compiled:
 
 def compile_doodle(doodle: Doodle, library_dir=None, use_builtin: bool = True, params: SegmenterParams = SegmenterParams(),
                    fps: float = 30.0, scale: float | None = None, threshold: float = 2.0,
-                   pin: bool = True, terrain=None) -> list[Compiled]:
+                   pin: bool = True, terrain=None, jump_arc: str = "clip") -> list[Compiled]:
     """Every track of a doodle turned into an animation on one timeline (feet pinned in
     their contacts unless ``pin`` is False)."""
     from retarget.feet import clamp_to_ground, pin_feet
@@ -96,7 +97,7 @@ def compile_doodle(doodle: Doodle, library_dir=None, use_builtin: bool = True, p
             spans.append(span)
             placed.append((span, clip))
             used[seg.action] = clip.path if on_skeleton else None
-        path, heading = world_path(track.t, track.p, spans, scale, terrain)
+        path, heading = world_path(track.t, track.p, spans, scale, terrain, jump_arc)
         frame_path = np.column_stack([np.interp(times, track.t, path[:, k]) for k in range(3)])
         frame_heading = np.interp(times, track.t, heading)
         pieces = []

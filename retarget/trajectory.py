@@ -41,10 +41,33 @@ class Span:
     execution: tuple[float, float] = (0.0, 1.0)  # execution stage as fractions of the clip
 
 
+JUMP_ALPHA = 2.5
+
+
+def hermite_arc(start: np.ndarray, end: np.ndarray, w: np.ndarray, alpha: float = JUMP_ALPHA,
+                apex: float | None = None) -> np.ndarray:
+    """Points (m, 3) at ``w`` ∈ [0, 1] of the beautified jump from ``start`` to ``end``
+    (§5.2): a cubic Hermite curve whose tangents are vertical — up at take-off, down at
+    landing — of length ``α·‖end − start‖``. With ``apex`` (metres above the take-off), α is
+    chosen so the curve's middle is that high: ``α = 4·apex / ‖end − start‖``."""
+    length = float(np.linalg.norm(end - start))
+    if apex is not None:
+        alpha = 4.0 * apex / max(length, 1e-6)
+    up = np.array([0.0, 1.0, 0.0]) * alpha * length
+    w = np.asarray(w, dtype=float)[:, None]
+    h00, h10 = 2 * w**3 - 3 * w**2 + 1, w**3 - 2 * w**2 + w
+    h01, h11 = -2 * w**3 + 3 * w**2, w**3 - w**2
+    return h00 * start + h10 * up + h01 * end + h11 * (-up)
+
+
 def world_path(t: np.ndarray, p: np.ndarray, spans: list[Span], scale: float,
-               terrain=None) -> tuple[np.ndarray, np.ndarray]:
+               terrain=None, jump_arc: str = "clip") -> tuple[np.ndarray, np.ndarray]:
     """Ground path (n, 3) of the root — on ``terrain`` (flat y = 0 when None), cast along
-    gravity — and heading (n,) in radians about +y (0 faces +z)."""
+    gravity — and heading (n,) in radians about +y (0 faces +z).
+
+    ``jump_arc``: ``"clip"`` leaves a jump's height to its clip; ``"hermite"`` adds the
+    beautified arc (α = 2.5) above the ground during the execution stage; ``"apex"`` the
+    arc whose apex keeps the doodle's own (scaled) height above take-off."""
     ground = (p - p[0]) * scale
     ground[:, 1] = 0.0
     path = ground.copy()
@@ -61,7 +84,27 @@ def world_path(t: np.ndarray, p: np.ndarray, spans: list[Span], scale: float,
     heading = _heading(t, path, spans)
     if terrain is not None:
         path[:, 1] = terrain.height(path[:, [0, 2]])
+    if jump_arc not in ("clip", "hermite", "apex"):
+        raise ValueError(f"jump_arc must be clip, hermite or apex, not {jump_arc!r}")
+    if jump_arc != "clip":
+        for s in spans:
+            if s.jumping and s.i1 - s.i0 > 2:
+                path[s.i0:s.i1, 1] += _arc_lift(t[s.i0:s.i1], path[s.i0:s.i1], p[s.i0:s.i1], s, scale, jump_arc)
     return path, heading
+
+
+def _arc_lift(t: np.ndarray, points: np.ndarray, doodle: np.ndarray, span: Span, scale: float, mode: str) -> np.ndarray:
+    """Height of the beautified arc above the straight ground line, over the execution."""
+    u = (t - t[0]) / max(t[-1] - t[0], 1e-9)
+    a, b = span.execution
+    w = np.clip((u - a) / max(b - a, 1e-6), 0.0, 1.0)
+    start, end = points[0].copy(), points[-1].copy()
+    start[1] = end[1] = 0.0
+    apex = None
+    if mode == "apex":
+        apex = max(float((doodle[:, 1] - doodle[0, 1]).max()) * scale, 0.0)
+    arc = hermite_arc(start, end, w, apex=apex)
+    return arc[:, 1]
 
 
 def _retimed_jump(t: np.ndarray, points: np.ndarray, span: Span) -> np.ndarray:
