@@ -115,6 +115,7 @@ def compile_doodle(doodle: Doodle, library_dir=None, use_builtin: bool = True, p
             hips = _fk(clip.motion)[0][:, pelvis][:, [0, 2]]
             travels = not span.in_place and float(np.linalg.norm(hips[-1] - hips[0])) > 0.2
             pieces.append(Placed(span, clip.motion, pelvis, cycles, times, progress if travels else None, travels))
+        pieces = _transition_points(pieces, [clip for _, clip in placed])
         motion, transitions = sequence(pieces, times, frame_path[:, [0, 2]], frame_heading, skeleton, fps,
                                        ground_y=frame_path[:, 1])
         if pin:
@@ -127,6 +128,27 @@ def compile_doodle(doodle: Doodle, library_dir=None, use_builtin: bool = True, p
         results.append(Compiled(track.name, motion, segments, tokens, frame_path, transitions, used, rest.roles,
                                 terrain, ranges, projected))
     return results
+
+
+def _transition_points(pieces: list, clips: list) -> list:
+    """Clip ranges between transition points (§5.3.1) for neighbouring one-shot clips."""
+    from dataclasses import replace as _replace
+
+    from retarget.transitions import transition_point
+
+    pieces = list(pieces)
+    for k in range(len(pieces) - 1):
+        a, b = pieces[k], pieces[k + 1]
+        one_shot_a, one_shot_b = a.cycles == 0 and a.progress is None, b.cycles == 0 and b.progress is None
+        if not (one_shot_a or one_shot_b) or a.motion.frames < 4 or b.motion.frames < 4:
+            continue
+        i, j = transition_point(a.motion, b.motion, clips[k].stages, clips[k + 1].stages, a.pelvis, b.pelvis)
+        start = a.clip_in / a.motion.frame_time
+        if one_shot_a and i - start >= 2:
+            pieces[k] = _replace(a, clip_out=i * a.motion.frame_time)
+        if one_shot_b and b.motion.frames - 1 - j >= 2:
+            pieces[k + 1] = _replace(b, clip_in=j * b.motion.frame_time)
+    return pieces
 
 
 def _compile_skeleton(library, user, clips):

@@ -7,9 +7,11 @@ joined by blended transitions, into one motion on one timeline.
   last cycle is a partial one (the thesis scales it down; here it is cut).
 * The root: horizontal position from the transferred path, height from the clip, yaw from
   the path's heading composed with the clip's own root rotation.
-* Transitions: the two neighbouring clips are cross-faded over ``blend`` seconds around
-  each boundary (rotations by slerp, root by linear interpolation), with smoothstep
-  weights. (Transition points chosen on frame-distance maps, §5.3.1, are still to come.)
+* Transitions: a non-cyclic clip is entered and left at the transition points chosen on
+  frame-distance maps by the stage policies (§5.3.1, :mod:`retarget.transitions`), so it
+  plays only that range; neighbouring clips are then cross-faded over ``blend`` seconds
+  around each boundary (rotations by normalised interpolation, root linearly, smoothstep
+  weights).
 """
 
 from __future__ import annotations
@@ -36,6 +38,8 @@ class Placed:
     times: np.ndarray | None = None
     progress: np.ndarray | None = None
     travels: bool = False  # the clip moves the character (walks, jumps); else it acts on the spot
+    clip_in: float = 0.0  # clip time (s) played at the segment's start (a transition point)
+    clip_out: float | None = None  # clip time (s) played at its end (None: the clip's end)
 
 
 def travel_curve(motion: Motion, pelvis: int) -> np.ndarray:
@@ -88,7 +92,8 @@ def clip_time(placed: Placed, t: np.ndarray) -> np.ndarray:
         cycle = (m.frames - 1) * m.frame_time
         phase = u * placed.cycles
         return np.where(u >= 1.0, cycle, (phase % 1.0) * cycle)
-    return u * (m.frames - 1) * m.frame_time
+    end = (m.frames - 1) * m.frame_time if placed.clip_out is None else placed.clip_out
+    return placed.clip_in + u * (end - placed.clip_in)
 
 
 def pose_at(placed: Placed, t: np.ndarray, path_xz: np.ndarray, heading: np.ndarray,
