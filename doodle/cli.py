@@ -147,7 +147,7 @@ def cmd_compile(args) -> int:
     terrain = parse_terrain(args.terrain) if args.terrain else None
     doodle = _load(args.file, args, mounts)
     results = compile_doodle(doodle, args.library, not args.no_builtin, params, args.fps, args.scale, args.threshold,
-                             not args.no_foot_pinning, terrain, args.jump_arc)
+                             not args.no_foot_pinning, terrain, args.jump_arc, args.retime)
     out = Path(args.output)
     out.mkdir(parents=True, exist_ok=True)
     seconds = _seconds(doodle)
@@ -358,6 +358,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--jump-arc", choices=["clip", "hermite", "apex"], default="clip",
                    help="jump height from the clip (default), a Hermite arc (alpha 2.5), or one keeping the doodle's apex")
     p.add_argument("--preview", action="store_true", help="also draw plan.png (paths) and keyframes.png (poses)")
+    p.add_argument("--retime", choices=["uniform", "gesture"], default="uniform",
+                   help="one-shot clips at an even pace (default) or following the hand's own timing (5.3.3)")
     _segmenter_options(p)
     p.set_defaults(run=cmd_compile)
 

@@ -60,7 +60,7 @@ class Compiled:
 
 def compile_doodle(doodle: Doodle, library_dir=None, use_builtin: bool = True, params: SegmenterParams = SegmenterParams(),
                    fps: float = 30.0, scale: float | None = None, threshold: float = 2.0,
-                   pin: bool = True, terrain=None, jump_arc: str = "clip") -> list[Compiled]:
+                   pin: bool = True, terrain=None, jump_arc: str = "clip", retime: str = "uniform") -> list[Compiled]:
     """Every track of a doodle turned into an animation on one timeline (feet pinned in
     their contacts unless ``pin`` is False)."""
     from retarget.feet import clamp_to_ground, pin_feet
@@ -114,7 +114,9 @@ def compile_doodle(doodle: Doodle, library_dir=None, use_builtin: bool = True, p
 
             hips = _fk(clip.motion)[0][:, pelvis][:, [0, 2]]
             travels = not span.in_place and float(np.linalg.norm(hips[-1] - hips[0])) > 0.2
-            pieces.append(Placed(span, clip.motion, pelvis, cycles, times, progress if travels else None, travels))
+            gesture = gesture_timing(track, span) if retime == "gesture" and not span.cyclic else None
+            pieces.append(Placed(span, clip.motion, pelvis, cycles, times, progress if travels else None, travels,
+                                 gesture=gesture))
         pieces = _transition_points(pieces, [clip for _, clip in placed])
         motion, transitions = sequence(pieces, times, frame_path[:, [0, 2]], frame_heading, skeleton, fps,
                                        ground_y=frame_path[:, 1])
@@ -128,6 +130,24 @@ def compile_doodle(doodle: Doodle, library_dir=None, use_builtin: bool = True, p
         results.append(Compiled(track.name, motion, segments, tokens, frame_path, transitions, used, rest.roles,
                                 terrain, ranges, projected))
     return results
+
+
+def gesture_timing(track, span) -> tuple[np.ndarray, np.ndarray] | None:
+    """Gesture-based retiming (§5.3.3): the share of the segment's arc length the hand has
+    covered at each of its sample times, ``β(t)/L`` — of the path, or of the rotation for a
+    gesture that barely translates. None for a gesture that does not move."""
+    seg = slice(span.i0, span.i1)
+    t = track.t[seg]
+    if len(t) < 2:
+        return None
+    steps = np.linalg.norm(np.diff(track.p[seg], axis=0), axis=1)
+    if steps.sum() < 1e-3:
+        q = track.q[seg]
+        steps = 2 * np.arccos(np.clip(np.abs(np.sum(q[1:] * q[:-1], axis=1)), 0.0, 1.0))
+    total = steps.sum()
+    if not total > 0:
+        return None
+    return t, np.concatenate([[0.0], np.cumsum(steps)]) / total
 
 
 def _transition_points(pieces: list, clips: list) -> list:

@@ -40,6 +40,7 @@ class Placed:
     travels: bool = False  # the clip moves the character (walks, jumps); else it acts on the spot
     clip_in: float = 0.0  # clip time (s) played at the segment's start (a transition point)
     clip_out: float | None = None  # clip time (s) played at its end (None: the clip's end)
+    gesture: tuple | None = None  # (times, fraction): gesture-based retiming, §5.3.3
 
 
 def travel_curve(motion: Motion, pelvis: int) -> np.ndarray:
@@ -80,6 +81,8 @@ def clip_time(placed: Placed, t: np.ndarray) -> np.ndarray:
     """Clip time for doodle times ``t`` inside (or clamped to) the span."""
     s, m = placed.span, placed.motion
     u = np.clip((t - s.t0) / max(s.t1 - s.t0, 1e-9), 0.0, 1.0)
+    if placed.gesture is not None and placed.cycles == 0:
+        u = np.interp(t, *placed.gesture)
     if placed.progress is not None:
         curve = travel_curve(m, placed.pelvis)
         length = curve[-1]

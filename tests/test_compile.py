@@ -178,3 +178,19 @@ def test_preview_images(tmp_path):
     # coloured segments in the plan view: more than the grey and black of axes and text
     plan = mpimg.imread(out / "plan.png")[..., :3]
     assert (np.ptp(plan, axis=2) > 0.3).mean() > 0.001
+
+
+def test_gesture_retiming_follows_the_hand(tmp_path):
+    """§5.3.3: with --retime gesture a one-shot clip advances with the hand's arc length:
+    a stroke that is slow, then fast, plays the clip's first half over most of the time."""
+    from doodle.pipeline import gesture_timing
+    from retarget.trajectory import Span
+
+    n = 100
+    t = np.linspace(0, 1, n)
+    s = np.where(t < 0.8, 0.25 * t / 0.8, 0.25 + 0.75 * (t - 0.8) / 0.2)  # 25 % of the way in 80 % of the time
+    track = type("T", (), {"t": t, "p": np.column_stack([np.zeros(n), s, np.zeros(n)]), "q": np.tile([0, 0, 0, 1.0], (n, 1))})
+    times, fraction = gesture_timing(track, Span("Stomp", 0.0, 1.0, 0, n, True, False, False))
+    assert fraction[0] == 0 and fraction[-1] == pytest.approx(1.0)
+    assert np.interp(0.8, times, fraction) == pytest.approx(0.25, abs=0.02)
+    assert main(["compile", str(DEMO), "-o", str(tmp_path / "out"), "--retime", "gesture"]) == 0
