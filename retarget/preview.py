@@ -72,3 +72,38 @@ def keyframes(results, path) -> Path:
     frames = {r.track: [int((a + b) // 2) for a, b in r.frame_ranges] for r in results}
     _atomic_png(path, lambda name: contact_sheet(motions, name, frames=frames))
     return path
+
+
+def compare_picture(neutral, styled, effectors: list[int], path, title: str = "") -> Path:
+    """Fig. 5.13-style comparison: neutral and stylised end-effector paths (side view, z
+    forward, y up) and their speeds over normalised time."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    path = Path(path)
+    fig, axes = plt.subplots(1, 3, figsize=(12, 4))
+    for ax, motion, label in ((axes[0], neutral, "neutral"), (axes[1], styled, title or "stylised")):
+        world = forward_kinematics(motion)[0]
+        for j in effectors:
+            ax.plot(world[:, j, 2], world[:, j, 1], lw=1.5, label=motion.skeleton.names[j])
+        ax.set_title(label)
+        ax.set_aspect("equal")
+        ax.set_xlabel("z (m)")
+        ax.set_ylabel("y (m)")
+        ax.grid(alpha=0.3)
+    axes[0].legend(fontsize=7)
+    for motion, style, label in ((neutral, "-", "neutral"), (styled, "--", "stylised")):
+        world = forward_kinematics(motion)[0]
+        j = effectors[0]
+        speed = np.linalg.norm(np.gradient(world[:, j], motion.frame_time, axis=0), axis=1)
+        axes[2].plot(np.arange(motion.frames) * motion.frame_time, speed, style, label=label)
+    axes[2].set_xlabel("time (s)")
+    axes[2].set_ylabel(f"{neutral.skeleton.names[effectors[0]]} speed (m/s)")
+    axes[2].legend(fontsize=7)
+    axes[2].grid(alpha=0.3)
+    fig.tight_layout()
+    _atomic_png(path, lambda name: fig.savefig(name, dpi=90))
+    plt.close(fig)
+    return path

@@ -1,0 +1,258 @@
+"""Laban stylisation (thesis §5.4): operators, and the Time and Weight modifiers built on them.
+
+Operators (§5.4.2), on any skeleton with the pelvis/chest/head partition (§5.4.1):
+
+* **motion scale** (eq. 5.1) over a frame range: each bone's rotation relative to the
+  range's first frame is slerped towards that frame's by a factor (positions likewise),
+  *partially* (spine and primary bones only) or *fully* (every bone); frames after the
+  range take the change at its end and fade it out to the clip's end (cohesion, eq. 5.2);
+  feet that touched the ground keep their height (IK, two-bone, instead of FABRIK);
+* **retiming** (eq. 5.3): a map from clip time to output time built stage by stage,
+  ``f_i(t) = f_{i-1}(end_{i-1}) + a_i (t − start_i)^{b_i}``;
+* **reshaping**: a rotation shift on the spine about its local x axis (Vertical shape —
+  sinking forward, rising back) or on the primary bones about their local z axis
+  (Horizontal shape — spreading, enclosing), during the execution stage.
+
+Modifiers (§5.4.3):
+
+* **Time** ``L_t ∈ [−1, 1]`` (Sudden > 0, Sustained < 0): preparation and anticipation
+  scaled down fully by ``c = 1/(3|L_t| + 1)``; anticipation retimed by ``1/(1 − 0.5 L_t)``
+  (Sudden: longer) or ``1 + 0.5 L_t`` (Sustained: shorter); execution by
+  ``a = 1/(1 + 2 L_t)``, ``b = 1 − 0.4 L_t`` (Sudden: shorter, accelerating) or
+  ``a = 1 − 2 L_t``, ``b = 1 − 0.4 L_t`` (Sustained: longer, decelerating). The thesis's
+  formulas use t in seconds within each stage.
+* **Weight** ``L_w ∈ [−1, 1]`` (Strong > 0, Light < 0): the whole clip scaled partially
+  by ``c = 1 + L_w`` (Strong) or ``1/(1 − L_w)`` (Light); then retimed so the clip plays at
+  a speed proportional to ``V_e^{α L_w}`` (α = 1.5, ``V_e`` the mean joint speed, made
+  relative to its mean and kept in [0.05, 1] for Light; the rate capped at 3× either way
+  so no bone turns further between two frames than interpolation can follow) — amplifying
+  speed variations for Strong, flattening them for Light — with the duration kept
+  (eq. 5.4–5.5); and a
+  Vertical-shape shift of ``0.1 L_w`` rad (Strong sinks, Light rises).
+* Combined: Time before Weight. ``L_t = L_w = 0`` returns the clip unchanged.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+from scipy.spatial.transform import Rotation, Slerp
+
+from doodle.quat import make_continuous
+from retarget.analysis import Stages, foot_contacts, guess_roles, partition
+from retarget.feet import two_bone_ik
+from retarget.skeleton import Motion, forward_kinematics
+
+ALPHA_WEIGHT = 1.5
+OVERSAMPLE = 4  # retimed output has 4× a 30 fps clip's frame rate: frames at most 1/120 s apart
+MAX_SPEEDUP = 3.0  # Weight retiming plays no frame more than 3× faster (or slower) than the clip
+
+
+def _bones(motion: Motion, mode: str) -> np.ndarray:
+    """Joints a motion scale acts on — never the root nor joints above the pelvis: they
+    carry the character's place and facing (scaling them would slide a walk and turn a
+    flip into one and a half)."""
+    roles = guess_roles(motion.skeleton)
+    pelvis = roles.get("pelvis", 0)
+    carriers = {0, pelvis} if motion.skeleton.parents[pelvis] < 0 else set(range(pelvis + 1))
+    if mode == "full" or not {"pelvis", "chest", "head"} <= set(roles):
+        chosen = range(len(motion.skeleton))
+    else:
+        parts = partition(motion.skeleton, roles["pelvis"], roles["chest"], roles["head"])
+        chosen = parts["spine"] + parts["primary"]
+    return np.array([b for b in chosen if b not in carriers], dtype=int)
+
+
+def _continuous(rv: np.ndarray) -> np.ndarray:
+    """Rotation vectors made continuous in time: where one wraps past π, the equivalent
+    vector of angle ``θ − 2π`` nearest the previous frame's is taken, so scaling the
+    angles of a rotation that passes half a turn does not jump."""
+    rv = rv.copy()
+    for i in range(1, len(rv)):
+        angle = np.linalg.norm(rv[i])
+        if angle < 1e-9:
+            continue
+        axis = rv[i] / angle
+        options = [rv[i], axis * (angle - 2 * np.pi), axis * (angle + 2 * np.pi)]
+        rv[i] = min(options, key=lambda v: np.linalg.norm(v - rv[i - 1]))
+    return rv
+
+
+def _slerp_identity(q: np.ndarray, w) -> np.ndarray:
+    """slerp(identity, q, w) for quaternions (F, 4) in time order: the rotation scaled by w."""
+    rv = _continuous(Rotation.from_quat(q.reshape(-1, 4)).as_rotvec())
+    w = np.broadcast_to(np.asarray(w, dtype=float), rv.shape[:1])
+    return Rotation.from_rotvec(rv * w[:, None]).as_quat().reshape(q.shape)
+
+
+def motion_scale(motion: Motion, start: int, end: int, c: float, mode: str = "partial",
+                 keep_contacts: bool = True) -> Motion:
+    """Eq. 5.1 over frames [start, end), cohesion (eq. 5.2) after it, contacts restored."""
+    if c == 1.0 or end - start < 2:
+        return motion
+    end = min(end, motion.frames)
+    bones = _bones(motion, mode)
+    rots, trans = motion.rotations.copy(), motion.translations.copy()
+    for b in bones:
+        q0 = Rotation.from_quat(rots[start, b])
+        r = q0 * Rotation.from_quat(rots[start:end, b]).inv()  # q(ts) q(t)^-1
+        scaled = Rotation.from_quat(_slerp_identity(r.as_quat(), c))
+        rots[start:end, b] = (scaled.inv() * q0).as_quat()
+        trans[start:end, b] = trans[start, b] + c * (trans[start:end, b] - trans[start, b])
+    if end < motion.frames:  # cohesion: the change at the end fades out over the rest
+        last = end - 1
+        w = 1.0 - (np.arange(end, motion.frames) - last) / max(motion.frames - 1 - last, 1)
+        for b in bones:
+            delta = Rotation.from_quat(rots[last, b]) * Rotation.from_quat(motion.rotations[last, b]).inv()
+            fade = Rotation.from_quat(_slerp_identity(np.repeat(delta.as_quat()[None], len(w), 0), w))
+            rots[end:, b] = (fade * Rotation.from_quat(rots[end:, b])).as_quat()
+            trans[end:, b] += np.outer(w, trans[last, b] - motion.translations[last, b])
+    out = replace(motion, rotations=rots, translations=trans)
+    return _restore_contacts(motion, out) if keep_contacts else out
+
+
+def _restore_contacts(before: Motion, after: Motion) -> Motion:
+    roles = guess_roles(before.skeleton)
+    feet = [roles[k] for k in ("left_foot", "right_foot") if k in roles]
+    if not feet:
+        return after
+    old = forward_kinematics(before)[0]
+    contact = foot_contacts(before, feet, world=old)
+    for k, ankle in enumerate(feet):
+        if not contact[:, k].any():
+            continue
+        knee = int(before.skeleton.parents[ankle])
+        hip = int(before.skeleton.parents[knee]) if knee >= 0 else -1
+        if hip < 0:
+            continue
+        new = forward_kinematics(after)[0][:, ankle]
+        target = new.copy()
+        target[:, 1] = old[:, ankle, 1]
+        after = two_bone_ik(after, hip, knee, ankle, target, contact[:, k].astype(float))
+    return after
+
+
+def retime(motion: Motion, clip_to_out, oversample: int = 1) -> Motion:
+    """The motion re-sampled after mapping clip time t to output time ``clip_to_out(t)``
+    (non-decreasing on the clip's frame times), at ``oversample`` times its frame rate —
+    so a stage squeezed into a few frames keeps its shape."""
+    t = np.arange(motion.frames) * motion.frame_time
+    out = np.maximum.accumulate(np.asarray(clip_to_out(t), dtype=float))
+    out = out - out[0]
+    if out[-1] <= 0:
+        return motion
+    step = motion.frame_time / oversample
+    n = int(np.floor(out[-1] / step + 1e-9)) + 1
+    new_t = np.minimum(np.arange(n) * step, out[-1])
+    clip_t = np.interp(new_t, out, t)
+    trans = np.stack([np.stack([np.interp(clip_t, t, motion.translations[:, j, k]) for k in range(3)], -1)
+                      for j in range(len(motion.skeleton))], axis=1)
+    rots = np.stack([Slerp(t, Rotation.from_quat(motion.rotations[:, j]))(np.clip(clip_t, t[0], t[-1])).as_quat()
+                     for j in range(len(motion.skeleton))], axis=1)
+    return replace(motion, translations=trans, rotations=rots, frame_time=step)
+
+
+def _oversample(motion: Motion) -> int:
+    """Oversampling that brings a retimed clip's frames to at most 1/120 s apart."""
+    return max(1, int(np.ceil(motion.frame_time * 30 * OVERSAMPLE - 1e-9)))
+
+
+def stage_retiming(stages: Stages, frame_time: float, rates: dict) -> callable:
+    """Eq. 5.3: clip time → output time, stage by stage; ``rates[stage] = (a, b)``."""
+    bounds = stages.bounds()
+
+    def f(t: np.ndarray) -> np.ndarray:
+        out = np.zeros_like(t)
+        offset = 0.0
+        for name, (s, e) in bounds.items():
+            s_t, e_t = s * frame_time, e * frame_time
+            a, b = rates.get(name, (1.0, 1.0))
+            inside = (t >= s_t) & (t <= e_t)
+            out[inside] = offset + a * np.power(t[inside] - s_t, b)
+            offset += a * np.power(max(e_t - s_t, 0.0), b)
+        return out
+
+    return f
+
+
+def reshape(motion: Motion, start: int, end: int, angle: float, shape: str = "vertical", fade: int = 4) -> Motion:
+    """Rotation shift on the spine about local x (vertical: sinking > 0, rising < 0) or the
+    primary bones about local z (horizontal: spreading > 0, enclosing < 0) over frames
+    [start, end), eased in and out over ``fade`` frames."""
+    if angle == 0.0 or end <= start:
+        return motion
+    roles = guess_roles(motion.skeleton)
+    if not {"pelvis", "chest", "head"} <= set(roles):
+        return motion
+    parts = partition(motion.skeleton, roles["pelvis"], roles["chest"], roles["head"])
+    bones = [b for b in parts["spine"] if b != roles["pelvis"]] if shape == "vertical" else parts["primary"]
+    axis = np.array([1.0, 0.0, 0.0]) if shape == "vertical" else np.array([0.0, 0.0, 1.0])
+    w = np.zeros(motion.frames)
+    w[start:end] = 1.0
+    for k in range(1, fade + 1):
+        if start - k >= 0:
+            w[start - k] = 1 - k / (fade + 1)
+        if end - 1 + k < motion.frames:
+            w[end - 1 + k] = 1 - k / (fade + 1)
+    rots = motion.rotations.copy()
+    share = angle / max(len(bones), 1) if shape == "vertical" else angle
+    for b in bones:
+        sign = 1.0
+        name = motion.skeleton.names[b]
+        if shape == "horizontal" and ("left" in name.lower() or name.endswith("_L")):
+            sign = -1.0
+        shift = Rotation.from_rotvec(np.outer(w * share * sign, axis))
+        rots[:, b] = (Rotation.from_quat(rots[:, b]) * shift).as_quat()
+    return replace(motion, rotations=rots)
+
+
+def time_modifier(motion: Motion, stages: Stages, lt: float) -> tuple[Motion, Stages]:
+    """Sudden (L_t > 0) or Sustained (L_t < 0); returns the motion and its new stages."""
+    lt = float(np.clip(lt, -1.0, 1.0))
+    if lt == 0.0:
+        return motion, stages
+    c = 1.0 / (3 * abs(lt) + 1.0)
+    m = motion_scale(motion, 0, max(stages.preparation, 1), c, "full")
+    m = motion_scale(m, stages.preparation, max(stages.anticipation, stages.preparation + 1), c, "full")
+    ant = 1.0 / (1.0 - 0.5 * lt) if lt >= 0 else 0.5 * lt + 1.0
+    exe = (1.0 / (2 * lt + 1.0), 1.0 - 0.4 * lt) if lt >= 0 else (1.0 - 2 * lt, 1.0 - 0.4 * lt)
+    f = stage_retiming(stages, motion.frame_time, {"anticipation": (ant, 1.0), "execution": exe})
+    out = retime(m, f, oversample=_oversample(m))
+    ends = [stages.preparation, stages.anticipation, stages.execution, stages.follow_through]
+    new = [int(round(float(f(np.array([e * motion.frame_time]))[0]) / out.frame_time)) for e in ends]
+    new = list(np.minimum(np.maximum.accumulate(new), out.frames))
+    return out, Stages(*new, out.frames)
+
+
+def weight_modifier(motion: Motion, stages: Stages, lw: float, mode: str = "partial") -> Motion:
+    """Strong (L_w > 0) or Light (L_w < 0), duration kept."""
+    lw = float(np.clip(lw, -1.0, 1.0))
+    if lw == 0.0:
+        return motion
+    c = 1.0 + lw if lw > 0 else 1.0 / (1.0 - lw)
+    m = motion_scale(motion, 0, motion.frames, c, mode)
+    world = forward_kinematics(m)[0]
+    step = np.linalg.norm(np.diff(world, axis=0), axis=2).mean(axis=1)
+    v = np.concatenate([step[:1], step]) / max(step.mean(), 1e-9)
+    if lw < 0:
+        v = np.clip(v / max(v.max(), 1e-9), 0.05, 1.0)
+    else:
+        v = np.maximum(v, 0.05)
+    rate = np.clip(np.power(v, ALPHA_WEIGHT * lw), 1 / MAX_SPEEDUP, MAX_SPEEDUP)  # clip s per output s
+    dt_out = motion.frame_time / rate
+    dt_out *= (motion.frames - 1) * motion.frame_time / max(dt_out[1:].sum(), 1e-9)
+    out_times = np.concatenate([[0.0], np.cumsum(dt_out[1:])])
+    m = retime(m, lambda t: np.interp(t, np.arange(motion.frames) * motion.frame_time, out_times),
+               oversample=_oversample(m))
+    return reshape(m, stages.anticipation, stages.execution, 0.1 * lw, "vertical")
+
+
+def stylize(motion: Motion, stages: Stages, lt: float = 0.0, lw: float = 0.0) -> Motion:
+    """Time then Weight (§5.4.3); quaternions are returned sign-continuous per joint."""
+    m, st = time_modifier(motion, stages, lt)
+    m = weight_modifier(m, st, lw)
+    if m is motion:
+        return motion
+    rots = np.stack([make_continuous(m.rotations[:, j]) for j in range(len(m.skeleton))], axis=1)
+    return replace(m, rotations=rots)

@@ -1,0 +1,130 @@
+"""Laban stylisation (§5.4): operators and the Time and Weight modifiers — the measurable
+signatures of Fig. 5.16 on built-in and on Bandai clips."""
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+from scipy.interpolate import CubicSpline
+from scipy.ndimage import gaussian_filter1d
+
+from doodle.cli import main
+from library.manifest import builtin
+from retarget.analysis import Stages, foot_contacts, stages
+from retarget.bvh import read_bvh
+from retarget.clips import load_clips
+from retarget.skeleton import forward_kinematics
+from retarget.stylize import motion_scale, stylize, time_modifier
+
+CLIPS = load_clips(builtin())
+BANDAI = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "mocap" / "bandai" / "dataset-1"
+
+
+def effector(name):
+    c = CLIPS[name][0]
+    return c, c.roles["right_hand"] if name in ("Punch", "Throw", "Uppercut Jab") else c.roles["right_foot"]
+
+
+def path_of(motion, joint, rate=240.0, smooth=0.02):
+    """The joint's path resampled by a cubic spline and lightly smoothed (in seconds), so
+    clips at different frame rates compare."""
+    p = forward_kinematics(motion)[0][:, joint]
+    t = np.arange(motion.frames) * motion.frame_time
+    tt = np.arange(0, t[-1], 1 / rate)
+    return tt, gaussian_filter1d(CubicSpline(t, p)(tt), smooth * rate, axis=0)
+
+
+def peak_jerk(motion, joint):
+    tt, q = path_of(motion, joint)
+    j = q
+    for _ in range(3):
+        j = np.gradient(j, tt, axis=0)
+    return float(np.linalg.norm(j, axis=1).max())
+
+
+def speed_variation(motion, joint):
+    tt, q = path_of(motion, joint)
+    v = np.linalg.norm(np.gradient(q, tt, axis=0), axis=1)
+    return float(v.std() / v.mean())
+
+
+def amplitude(motion, joint):
+    return float(np.ptp(forward_kinematics(motion)[0][:, joint], axis=0).max())
+
+
+@pytest.mark.parametrize("name", ["Punch", "Kick", "Throw", "Uppercut Jab"])
+def test_sudden_and_sustained(name):
+    clip, j = effector(name)
+    execution = clip.stages.execution - clip.stages.anticipation
+    sudden, s_st = time_modifier(clip.motion, clip.stages, 1.0)
+    sustained, u_st = time_modifier(clip.motion, clip.stages, -1.0)
+    ratio = clip.motion.frame_time
+    assert (s_st.execution - s_st.anticipation) * sudden.frame_time < execution * ratio  # shorter
+    assert (u_st.execution - u_st.anticipation) * sustained.frame_time > execution * ratio  # longer
+    neutral = peak_jerk(clip.motion, j)
+    assert peak_jerk(sudden, j) > neutral
+    if name != "Uppercut Jab":
+        assert peak_jerk(sustained, j) < neutral
+
+
+@pytest.mark.parametrize("name", ["Punch", "Kick", "Throw", "Stomp", "Crescent Kick"])
+def test_strong_and_light(name):
+    clip, j = effector(name)
+    strong = stylize(clip.motion, clip.stages, 0.0, 1.0)
+    light = stylize(clip.motion, clip.stages, 0.0, -1.0)
+    assert strong.duration == pytest.approx(clip.motion.duration, abs=clip.motion.frame_time)
+    assert strong.fps == pytest.approx(120.0)
+    assert speed_variation(strong, j) > speed_variation(clip.motion, j) > speed_variation(light, j)
+    if name in ("Punch", "Kick"):
+        assert amplitude(strong, j) > amplitude(clip.motion, j) > amplitude(light, j)
+
+
+def test_neutral_is_unchanged_and_nothing_breaks():
+    for name, (clip,) in CLIPS.items():
+        same = stylize(clip.motion, clip.stages, 0.0, 0.0)
+        assert same is clip.motion, name
+        for lt, lw in ((1, 0), (-1, 0), (0, 1), (0, -1), (0.5, 0.5), (-0.5, -0.5)):
+            m = stylize(clip.motion, clip.stages, lt, lw)
+            assert np.isfinite(m.rotations).all() and np.isfinite(m.translations).all(), (name, lt, lw)
+            q = m.rotations
+            dots = np.sum(q[1:] * q[:-1], axis=-1)
+            assert dots.min() > 0, (name, lt, lw)  # no sign flips between frames
+            assert dots.min() > np.cos(np.radians(120) / 2), (name, lt, lw)  # nor turns interpolation can't follow
+
+
+def test_motion_scale_keeps_planted_feet_on_the_ground():
+    clip = CLIPS["Kick"][0]
+    feet = [clip.roles["left_foot"], clip.roles["right_foot"]]
+    before = forward_kinematics(clip.motion)[0]
+    contact = foot_contacts(clip.motion, feet, world=before)
+    scaled = motion_scale(clip.motion, 0, clip.motion.frames, 1.8, "partial")
+    after = forward_kinematics(scaled)[0]
+    for k, f in enumerate(feet):
+        assert np.abs(after[contact[:, k], f, 1] - before[contact[:, k], f, 1]).max() < 0.01
+
+
+@pytest.mark.parametrize("content", ["kick", "punch"])
+def test_bandai_clips(content):
+    path = BANDAI / f"dataset-1_{content}_normal_001.bvh"
+    if not path.exists():
+        pytest.skip("Bandai data not found")
+    motion = read_bvh(path)
+    st = stages(motion)
+    hand = motion.skeleton.index("Foot_R" if content == "kick" else "Hand_R")
+    light, strong = stylize(motion, st, 0, -1), stylize(motion, st, 0, 1)
+    if content == "kick":  # Bandai's punch clip holds four punches and long rests: it barely moves
+        assert speed_variation(strong, hand) > speed_variation(motion, hand) > speed_variation(light, hand)
+    assert np.isfinite(light.rotations).all() and np.isfinite(strong.rotations).all()
+    sudden = stylize(motion, st, 1, 0)
+    assert np.isfinite(sudden.rotations).all()
+
+
+def test_stylize_command(tmp_path, capsys):
+    clip = Path(__file__).resolve().parents[1] / "library" / "builtin" / "clips" / "punch.bvh"
+    out, png = tmp_path / "p.bvh", tmp_path / "p.png"
+    assert main(["stylize", str(clip), "--time", "1", "--stages", "9,16,20,27", "-o", str(out),
+                 "--compare", str(png)]) == 0
+    assert read_bvh(out, unit=1.0).fps == pytest.approx(120.0)
+    assert png.stat().st_size > 10_000
+    assert main(["stylize", str(clip), "--time", "2", "-o", str(out)]) == 1
+    assert "between -1 and 1" in capsys.readouterr().err
