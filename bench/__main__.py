@@ -2,7 +2,8 @@
 
 import sys
 
-from bench import bvh_speed, matcher_speed, real_gestures, segmenter_speed, stages_accuracy, terrain_speed
+from bench import (bvh_speed, matcher_speed, real_gestures, segmenter_speed, stages_accuracy, stylize_speed,
+                   terrain_speed)
 
 
 def main() -> int:
@@ -18,6 +19,8 @@ def main() -> int:
     stages_accuracy.main()
     print()
     terrain_speed.main()
+    print()
+    stylize_speed.main()
     return 0
 
 

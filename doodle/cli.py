@@ -146,8 +146,16 @@ def cmd_compile(args) -> int:
     params, mounts = _params(args)
     terrain = parse_terrain(args.terrain) if args.terrain else None
     doodle = _load(args.file, args, mounts)
+    from doodle.pipeline import read_edits
+
+    qualities = read_edits(args.edits) if args.edits else {}
+    for name, value in (("--time", args.time), ("--weight", args.weight)):
+        if not -1.0 <= value <= 1.0:
+            raise DoodleError(f"{name} must be between -1 and 1, not {value:g}")
+    if args.time or args.weight:
+        qualities.setdefault((None, None), (args.time, args.weight))
     results = compile_doodle(doodle, args.library, not args.no_builtin, params, args.fps, args.scale, args.threshold,
-                             not args.no_foot_pinning, terrain, args.jump_arc, args.retime)
+                             not args.no_foot_pinning, terrain, args.jump_arc, args.retime, qualities)
     out = Path(args.output)
     out.mkdir(parents=True, exist_ok=True)
     seconds = _seconds(doodle)
@@ -158,9 +166,10 @@ def cmd_compile(args) -> int:
         write_bvh(bvh, r.motion)
         report["tracks"][r.track] = {
             "bvh": str(bvh), "frames": r.motion.frames,
-            "segments": [{"action": s.action, "start": seconds(s.start), "end": seconds(s.end), "exact": s.exact,
-                          "distance": s.distance, "clip": r.clips.get(s.action),
-                          "tokens": [k.name for k in r.tokens[s.first:s.stop]]} for s in r.segments],
+            "segments": [{"index": i, "action": s.action, "start": seconds(s.start), "end": seconds(s.end),
+                          "exact": s.exact, "distance": s.distance, "clip": r.clips.get(s.action),
+                          "time": r.styles[i][0], "weight": r.styles[i][1],
+                          "tokens": [k.name for k in r.tokens[s.first:s.stop]]} for i, s in enumerate(r.segments)],
             "transitions": [round(b, 6) for b in r.transitions],
             "metrics": quality(r),
         }
@@ -392,6 +401,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--jump-arc", choices=["clip", "hermite", "apex"], default="clip",
                    help="jump height from the clip (default), a Hermite arc (alpha 2.5), or one keeping the doodle's apex")
     p.add_argument("--preview", action="store_true", help="also draw plan.png (paths) and keyframes.png (poses)")
+    p.add_argument("--time", type=float, default=0.0, help="Laban Time for every segment: sustained -1 … sudden 1")
+    p.add_argument("--weight", type=float, default=0.0, help="Laban Weight for every segment: light -1 … strong 1")
+    p.add_argument("--edits", metavar="FILE.json", help="per-segment time and weight (see README)")
     p.add_argument("--retime", choices=["uniform", "gesture"], default="uniform",
                    help="one-shot clips at an even pace (default) or following the hand's own timing (5.3.3)")
     _segmenter_options(p)

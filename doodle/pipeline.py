@@ -56,11 +56,13 @@ class Compiled:
     terrain: object = None  # retarget.terrain ground (None: flat y = 0)
     frame_ranges: list = None  # per segment, its first and last output frame
     projected: np.ndarray = None  # the doodle scaled and projected, before the transfer (n, 3)
+    styles: list = None  # per segment, the (L_t, L_w) applied
 
 
 def compile_doodle(doodle: Doodle, library_dir=None, use_builtin: bool = True, params: SegmenterParams = SegmenterParams(),
                    fps: float = 30.0, scale: float | None = None, threshold: float = 2.0,
-                   pin: bool = True, terrain=None, jump_arc: str = "clip", retime: str = "uniform") -> list[Compiled]:
+                   pin: bool = True, terrain=None, jump_arc: str = "clip", retime: str = "uniform",
+                   qualities: dict | None = None) -> list[Compiled]:
     """Every track of a doodle turned into an animation on one timeline (feet pinned in
     their contacts unless ``pin`` is False)."""
     from retarget.feet import clamp_to_ground, pin_feet
@@ -84,11 +86,16 @@ def compile_doodle(doodle: Doodle, library_dir=None, use_builtin: bool = True, p
     for track in doodle.tracks:
         tokens, segments = recognised[track.name]
         spans, placed, used = [], [], {}
-        for seg in segments:
+        styles = []
+        for index, seg in enumerate(segments):
             on_skeleton = [c for c in clips.get(seg.action, []) if c.motion.skeleton.names == skeleton.names]
             clip = on_skeleton[0] if on_skeleton else rest
             name = seg.action if seg.action in library.names else "Idle"
             action = library.action(name) if name in library.names else library.action(rest.action)
+            lt, lw = _quality_of(qualities, track.name, index)
+            if (lt or lw) and not action.cyclic and on_skeleton:
+                clip = _stylized(clip, lt, lw)
+            styles.append((lt, lw) if (lt or lw) and not action.cyclic and on_skeleton else (0.0, 0.0))
             n = clip.motion.frames
             b = clip.stages.bounds()
             execution = (b["execution"][0] / max(n - 1, 1), b["execution"][1] / max(n - 1, 1))
@@ -128,7 +135,7 @@ def compile_doodle(doodle: Doodle, library_dir=None, use_builtin: bool = True, p
         projected = (track.p - track.p[0]) * scale
         projected[:, 1] = 0.0 if terrain is None else terrain.height(projected[:, [0, 2]])
         results.append(Compiled(track.name, motion, segments, tokens, frame_path, transitions, used, rest.roles,
-                                terrain, ranges, projected))
+                                terrain, ranges, projected, styles))
     return results
 
 
@@ -148,6 +155,65 @@ def gesture_timing(track, span) -> tuple[np.ndarray, np.ndarray] | None:
     if not total > 0:
         return None
     return t, np.concatenate([[0.0], np.cumsum(steps)]) / total
+
+
+def _quality_of(qualities: dict | None, track: str, index: int) -> tuple[float, float]:
+    if not qualities:
+        return 0.0, 0.0
+    for key in ((track, index), (track, None), (None, None)):
+        if key in qualities:
+            return qualities[key]
+    return 0.0, 0.0
+
+
+def _stylized(clip, lt: float, lw: float):
+    """The clip with Time then Weight applied, its stages moved with it."""
+    from dataclasses import replace as _replace
+
+    from retarget.stylize import time_modifier, weight_modifier
+
+    motion, stages = time_modifier(clip.motion, clip.stages, lt)
+    motion = weight_modifier(motion, stages, lw)
+    return _replace(clip, motion=motion, stages=stages)
+
+
+def read_edits(path) -> dict:
+    """Per-segment qualities from a JSON edit file::
+
+        {"time": 0.5, "weight": 0.0,                      # every segment (optional)
+         "segments": [{"track": "c0", "index": 5, "time": 1.0, "weight": -0.5}]}
+    """
+    import json
+
+    try:
+        data = json.loads(open(path, encoding="utf-8").read())
+    except OSError as e:
+        raise DoodleError(f"{path}: cannot read: {e.strerror}") from None
+    except json.JSONDecodeError as e:
+        raise DoodleError(f"{path}:{e.lineno}: not valid JSON: {e.msg}") from None
+    if not isinstance(data, dict):
+        raise DoodleError(f"{path}: expected a JSON object with 'segments'")
+    out = {}
+
+    def quality(entry, where):
+        values = []
+        for key in ("time", "weight"):
+            v = entry.get(key, 0.0)
+            if not isinstance(v, (int, float)) or isinstance(v, bool) or not -1.0 <= v <= 1.0:
+                raise DoodleError(f"{path}: {where}: '{key}' must be a number in [-1, 1], not {v!r}")
+            values.append(float(v))
+        return tuple(values)
+
+    if "time" in data or "weight" in data:
+        out[(None, None)] = quality(data, "top level")
+    for i, entry in enumerate(data.get("segments", []), 1):
+        if not isinstance(entry, dict) or not isinstance(entry.get("track"), str):
+            raise DoodleError(f"{path}: segments #{i}: needs a 'track' name")
+        index = entry.get("index")
+        if index is not None and (not isinstance(index, int) or isinstance(index, bool) or index < 0):
+            raise DoodleError(f"{path}: segments #{i}: 'index' must be a segment number (0, 1, …)")
+        out[(entry["track"], index)] = quality(entry, f"segments #{i}")
+    return out
 
 
 def _transition_points(pieces: list, clips: list) -> list:

@@ -128,3 +128,22 @@ def test_stylize_command(tmp_path, capsys):
     assert png.stat().st_size > 10_000
     assert main(["stylize", str(clip), "--time", "2", "-o", str(out)]) == 1
     assert "between -1 and 1" in capsys.readouterr().err
+
+
+def test_compile_applies_qualities_per_segment(tmp_path, capsys):
+    import json
+
+    demo = Path(__file__).resolve().parents[1] / "examples" / "demo.doodle"
+    edits = tmp_path / "edits.json"
+    edits.write_text(json.dumps({"segments": [{"track": "c0", "index": 9, "time": 1.0, "weight": 0.5}]}))
+    out = tmp_path / "out"
+    assert main(["compile", str(demo), "-o", str(out), "--edits", str(edits)]) == 0
+    segs = json.loads((out / "report.json").read_text())["tracks"]["c0"]["segments"]
+    assert (segs[9]["action"], segs[9]["time"], segs[9]["weight"]) == ("Stomp", 1.0, 0.5)
+    assert all(s["time"] == 0.0 for s in segs if s["index"] != 9)
+    assert main(["compile", str(demo), "-o", str(out), "--time", "0.5"]) == 0
+    segs = json.loads((out / "report.json").read_text())["tracks"]["c0"]["segments"]
+    assert {s["action"] for s in segs if s["time"] == 0.5} == {"Jump", "Stomp"}  # one-shots; cyclic ones keep pace
+    edits.write_text('{"segments": [{"track": "c0", "index": 1, "time": 3}]}')
+    assert main(["compile", str(demo), "-o", str(out), "--edits", str(edits)]) == 1
+    assert "'time' must be a number in [-1, 1]" in capsys.readouterr().err
