@@ -268,10 +268,9 @@ def _library_import(args) -> int:
 
 
 def _library_sheet(args) -> int:
-    import tempfile
-
     from library.manifest import builtin, combine, load_library
     from retarget.clips import load_clips
+    from retarget.preview import atomic_png
     from retarget.sheet import contact_sheet
 
     user = load_library(args.library) if args.library else None
@@ -285,14 +284,7 @@ def _library_sheet(args) -> int:
               for name, found in clips.items()}
     out = Path(args.output)
     out.parent.mkdir(parents=True, exist_ok=True)
-    with tempfile.NamedTemporaryFile(suffix=".png", dir=out.parent, delete=False) as tmp:
-        pass
-    try:
-        contact_sheet(motions, tmp.name, frames=frames)
-        os.replace(tmp.name, out)
-    finally:
-        if os.path.exists(tmp.name):
-            os.unlink(tmp.name)
+    atomic_png(out, lambda name: contact_sheet(motions, name, frames=frames))
     print(f"{out}: {len(motions)} clips, key frames at the stage ends (side and front views)")
     return 0
 

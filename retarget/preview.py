@@ -20,7 +20,8 @@ from retarget.sheet import contact_sheet
 from retarget.skeleton import forward_kinematics
 
 
-def _atomic_png(path: Path, draw) -> None:
+def atomic_png(path: Path, draw) -> None:
+    """Call ``draw(temporary_name)`` and rename the file to ``path`` when it succeeded."""
     with tempfile.NamedTemporaryFile(suffix=".png", dir=path.parent, delete=False) as tmp:
         pass
     try:
@@ -60,7 +61,7 @@ def plan_view(results, projected: dict, path) -> Path:
     ax.legend(fontsize=7, loc="best")
     ax.grid(alpha=0.3)
     fig.tight_layout()
-    _atomic_png(path, lambda name: fig.savefig(name, dpi=100))
+    atomic_png(path, lambda name: fig.savefig(name, dpi=100))
     plt.close(fig)
     return path
 
@@ -70,7 +71,7 @@ def keyframes(results, path) -> Path:
     path = Path(path)
     motions = {r.track: r.motion for r in results}
     frames = {r.track: [int((a + b) // 2) for a, b in r.frame_ranges] for r in results}
-    _atomic_png(path, lambda name: contact_sheet(motions, name, frames=frames))
+    atomic_png(path, lambda name: contact_sheet(motions, name, frames=frames))
     return path
 
 
@@ -104,6 +105,6 @@ def compare_picture(neutral, styled, effectors: list[int], path, title: str = ""
     axes[2].legend(fontsize=7)
     axes[2].grid(alpha=0.3)
     fig.tight_layout()
-    _atomic_png(path, lambda name: fig.savefig(name, dpi=90))
+    atomic_png(path, lambda name: fig.savefig(name, dpi=90))
     plt.close(fig)
     return path
