@@ -56,9 +56,9 @@ def conjugate(q: np.ndarray) -> np.ndarray:
 
 
 def rotate(q: np.ndarray, u: np.ndarray) -> np.ndarray:
-    """Rotate vectors ``u`` (n, 3) by unit quaternions ``q`` (n, 4)."""
-    x, y, z, w = q[:, 0], q[:, 1], q[:, 2], q[:, 3]
-    ux, uy, uz = u[:, 0], u[:, 1], u[:, 2]
+    """Rotate vectors ``u`` (..., 3) by unit quaternions ``q`` (..., 4)."""
+    x, y, z, w = q[..., 0], q[..., 1], q[..., 2], q[..., 3]
+    ux, uy, uz = u[..., 0], u[..., 1], u[..., 2]
     tx = 2.0 * (y * uz - z * uy)
     ty = 2.0 * (z * ux - x * uz)
     tz = 2.0 * (x * uy - y * ux)
@@ -71,3 +71,20 @@ def rotate(q: np.ndarray, u: np.ndarray) -> np.ndarray:
 def rotate_inverse(q: np.ndarray, u: np.ndarray) -> np.ndarray:
     """Express world vectors ``u`` in the local frames ``q`` (``R^T u``)."""
     return rotate(conjugate(q), u)
+
+
+def log(q: np.ndarray) -> np.ndarray:
+    """Rotation vectors (..., 3) of unit quaternions, the angle ``2·atan2(|v|, w)``: taken
+    along a sign-continuous sequence it runs past π instead of wrapping."""
+    v = q[..., :3]
+    s = np.linalg.norm(v, axis=-1, keepdims=True)
+    angle = 2.0 * np.arctan2(s, q[..., 3:4])
+    return np.where(s > 1e-12, v / np.maximum(s, 1e-12) * angle, 2.0 * v)
+
+
+def exp(rv: np.ndarray) -> np.ndarray:
+    """Unit quaternions (..., 4) of rotation vectors (..., 3)."""
+    angle = np.linalg.norm(rv, axis=-1, keepdims=True)
+    half = 0.5 * angle
+    scale = np.where(angle > 1e-12, np.sin(half) / np.maximum(angle, 1e-12), 0.5)
+    return np.concatenate([rv * scale, np.cos(half)], axis=-1)

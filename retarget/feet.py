@@ -18,8 +18,8 @@ from __future__ import annotations
 from dataclasses import replace
 
 import numpy as np
-from scipy.spatial.transform import Rotation
 
+from doodle import quat
 from retarget.analysis import foot_contacts
 from retarget.skeleton import Motion, forward_kinematics
 
@@ -49,21 +49,21 @@ def two_bone_ik(motion: Motion, hip: int, knee: int, ankle: int, target: np.ndar
     axis0 = np.cross(c - a, b - a)
     # a straight leg has no bend plane: bend forward, about the hip's own x axis
     straight = np.linalg.norm(axis0, axis=1) < 1e-9
-    axis0[straight] = Rotation.from_quat(world[straight, hip]).apply([1.0, 0.0, 0.0])
+    axis0[straight] = quat.rotate(world[straight, hip], np.tile([1.0, 0.0, 0.0], (int(straight.sum()), 1)))
     axis0 = _unit(axis0)
     axis1 = np.cross(c - a, t - a)
     axis1 = np.where(np.linalg.norm(axis1, axis=1, keepdims=True) < 1e-12, axis0, _unit(axis1))
-    a_gr, b_gr = Rotation.from_quat(world[:, hip]), Rotation.from_quat(world[:, knee])
-    r0 = Rotation.from_rotvec(a_gr.inv().apply(axis0) * (ac_ab_1 - ac_ab_0)[:, None])
-    r1 = Rotation.from_rotvec(b_gr.inv().apply(axis0) * (ba_bc_1 - ba_bc_0)[:, None])
-    r2 = Rotation.from_rotvec(a_gr.inv().apply(axis1) * ac_at_0[:, None])
+    a_inv, b_inv = quat.conjugate(world[:, hip]), quat.conjugate(world[:, knee])
+    r0 = quat.exp(quat.rotate(a_inv, axis0) * (ac_ab_1 - ac_ab_0)[:, None])
+    r1 = quat.exp(quat.rotate(b_inv, axis0) * (ba_bc_1 - ba_bc_0)[:, None])
+    r2 = quat.exp(quat.rotate(a_inv, axis1) * ac_at_0[:, None])
     rots = motion.rotations.copy()
-    rots[:, hip] = (Rotation.from_quat(rots[:, hip]) * r0 * r2).as_quat()
-    rots[:, knee] = (Rotation.from_quat(rots[:, knee]) * r1).as_quat()
+    rots[:, hip] = quat.multiply(quat.multiply(rots[:, hip], r0), r2)
+    rots[:, knee] = quat.multiply(rots[:, knee], r1)
     # the foot keeps its orientation in the world (its sole stays on the ground)
-    new_hip_world = Rotation.from_quat(world[:, int(motion.skeleton.parents[hip])]) * Rotation.from_quat(rots[:, hip])
-    new_knee_world = new_hip_world * Rotation.from_quat(rots[:, knee])
-    rots[:, ankle] = (new_knee_world.inv() * Rotation.from_quat(world[:, ankle])).as_quat()
+    new_hip_world = quat.multiply(world[:, int(motion.skeleton.parents[hip])], rots[:, hip])
+    new_knee_world = quat.multiply(new_hip_world, rots[:, knee])
+    rots[:, ankle] = quat.multiply(quat.conjugate(new_knee_world), world[:, ankle])
     return replace(motion, rotations=rots)
 
 

@@ -85,20 +85,22 @@ class Motion:
 
 def forward_kinematics(motion: Motion) -> tuple[np.ndarray, np.ndarray]:
     """World positions (F, J, 3) and world rotations (F, J, 4) of every joint."""
+    from doodle import quat
+
     sk = motion.skeleton
     f, j = motion.frames, len(sk)
     positions = np.empty((f, j, 3))
-    rotations: list[Rotation | None] = [None] * j
+    rotations = np.empty((f, j, 4))
     for k in range(j):
-        local = Rotation.from_quat(motion.rotations[:, k].reshape(-1, 4))
         p = sk.parents[k]
         if p < 0:
-            rotations[k] = local
+            rotations[:, k] = motion.rotations[:, k]
             positions[:, k] = motion.translations[:, k]
         else:
-            rotations[k] = rotations[p] * local
-            positions[:, k] = positions[:, p] + rotations[p].apply(motion.translations[:, k])
-    return positions, np.stack([r.as_quat() for r in rotations], axis=1)
+            rotations[:, k] = quat.multiply(rotations[:, p], motion.rotations[:, k])
+            positions[:, k] = positions[:, p] + quat.rotate(rotations[:, p], motion.translations[:, k])
+    norm = np.linalg.norm(rotations, axis=-1, keepdims=True)
+    return positions, rotations / norm
 
 
 def end_site_positions(motion: Motion, world: tuple[np.ndarray, np.ndarray] | None = None) -> dict[int, np.ndarray]:

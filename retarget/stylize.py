@@ -39,6 +39,7 @@ from dataclasses import replace
 import numpy as np
 from scipy.spatial.transform import Rotation, Slerp
 
+from doodle import quat
 from doodle.quat import make_continuous
 from retarget.analysis import Stages, foot_contacts, guess_roles, partition
 from retarget.feet import two_bone_ik
@@ -64,26 +65,13 @@ def _bones(motion: Motion, mode: str) -> np.ndarray:
     return np.array([b for b in chosen if b not in carriers], dtype=int)
 
 
-def _continuous(rv: np.ndarray) -> np.ndarray:
-    """Rotation vectors made continuous in time: where one wraps past π, the equivalent
-    vector of angle ``θ − 2π`` nearest the previous frame's is taken, so scaling the
-    angles of a rotation that passes half a turn does not jump."""
-    rv = rv.copy()
-    for i in range(1, len(rv)):
-        angle = np.linalg.norm(rv[i])
-        if angle < 1e-9:
-            continue
-        axis = rv[i] / angle
-        options = [rv[i], axis * (angle - 2 * np.pi), axis * (angle + 2 * np.pi)]
-        rv[i] = min(options, key=lambda v: np.linalg.norm(v - rv[i - 1]))
-    return rv
-
-
 def _slerp_identity(q: np.ndarray, w) -> np.ndarray:
-    """slerp(identity, q, w) for quaternions (F, 4) in time order: the rotation scaled by w."""
-    rv = _continuous(Rotation.from_quat(q.reshape(-1, 4)).as_rotvec())
+    """slerp(identity, q, w) for quaternions (F, 4) in time order: the rotation scaled by w.
+    The quaternions are made sign-continuous first, so a rotation passing half a turn keeps
+    growing (angle past π) instead of jumping when it is scaled."""
+    rv = quat.log(make_continuous(q.reshape(-1, 4)))
     w = np.broadcast_to(np.asarray(w, dtype=float), rv.shape[:1])
-    return Rotation.from_rotvec(rv * w[:, None]).as_quat().reshape(q.shape)
+    return quat.exp(rv * w[:, None]).reshape(q.shape)
 
 
 def motion_scale(motion: Motion, start: int, end: int, c: float, mode: str = "partial",
@@ -95,18 +83,19 @@ def motion_scale(motion: Motion, start: int, end: int, c: float, mode: str = "pa
     bones = _bones(motion, mode)
     rots, trans = motion.rotations.copy(), motion.translations.copy()
     for b in bones:
-        q0 = Rotation.from_quat(rots[start, b])
-        r = q0 * Rotation.from_quat(rots[start:end, b]).inv()  # q(ts) q(t)^-1
-        scaled = Rotation.from_quat(_slerp_identity(r.as_quat(), c))
-        rots[start:end, b] = (scaled.inv() * q0).as_quat()
+        q0 = np.broadcast_to(rots[start, b], (end - start, 4))
+        r = quat.multiply(q0, quat.conjugate(rots[start:end, b]))  # q(ts) q(t)^-1
+        rots[start:end, b] = quat.multiply(quat.conjugate(_slerp_identity(r, c)), q0)
         trans[start:end, b] = trans[start, b] + c * (trans[start:end, b] - trans[start, b])
     if end < motion.frames:  # cohesion: the change at the end fades out over the rest
         last = end - 1
         w = 1.0 - (np.arange(end, motion.frames) - last) / max(motion.frames - 1 - last, 1)
         for b in bones:
-            delta = Rotation.from_quat(rots[last, b]) * Rotation.from_quat(motion.rotations[last, b]).inv()
-            fade = Rotation.from_quat(_slerp_identity(np.repeat(delta.as_quat()[None], len(w), 0), w))
-            rots[end:, b] = (fade * Rotation.from_quat(rots[end:, b])).as_quat()
+            delta = quat.multiply(rots[last, b], quat.conjugate(motion.rotations[last, b]))
+            if delta[3] < 0:
+                delta = -delta
+            fade = quat.exp(quat.log(delta)[None] * w[:, None])
+            rots[end:, b] = quat.multiply(fade, rots[end:, b])
             trans[end:, b] += np.outer(w, trans[last, b] - motion.translations[last, b])
     out = replace(motion, rotations=rots, translations=trans)
     return _restore_contacts(motion, out) if keep_contacts else out
@@ -137,6 +126,8 @@ def retime(motion: Motion, clip_to_out, oversample: int = 1) -> Motion:
     """The motion re-sampled after mapping clip time t to output time ``clip_to_out(t)``
     (non-decreasing on the clip's frame times), at ``oversample`` times its frame rate —
     so a stage squeezed into a few frames keeps its shape."""
+    if motion.frames < 2:
+        return motion
     t = np.arange(motion.frames) * motion.frame_time
     out = np.maximum.accumulate(np.asarray(clip_to_out(t), dtype=float))
     out = out - out[0]
@@ -146,10 +137,13 @@ def retime(motion: Motion, clip_to_out, oversample: int = 1) -> Motion:
     n = int(np.floor(out[-1] / step + 1e-9)) + 1
     new_t = np.minimum(np.arange(n) * step, out[-1])
     clip_t = np.interp(new_t, out, t)
-    trans = np.stack([np.stack([np.interp(clip_t, t, motion.translations[:, j, k]) for k in range(3)], -1)
-                      for j in range(len(motion.skeleton))], axis=1)
-    rots = np.stack([Slerp(t, Rotation.from_quat(motion.rotations[:, j]))(np.clip(clip_t, t[0], t[-1])).as_quat()
-                     for j in range(len(motion.skeleton))], axis=1)
+    f = np.clip(clip_t / motion.frame_time, 0, motion.frames - 1)
+    k = np.minimum(np.floor(f).astype(int), motion.frames - 2)
+    w = (f - k)[:, None, None]
+    trans = motion.translations[k] * (1 - w) + motion.translations[k + 1] * w
+    q = np.stack([make_continuous(motion.rotations[:, j]) for j in range(len(motion.skeleton))], axis=1)
+    a, b = q[k], q[k + 1]
+    rots = quat.multiply(a, quat.exp(quat.log(quat.multiply(quat.conjugate(a), b)) * w))  # slerp
     return replace(motion, translations=trans, rotations=rots, frame_time=step)
 
 
@@ -213,8 +207,10 @@ def time_modifier(motion: Motion, stages: Stages, lt: float) -> tuple[Motion, St
     if lt == 0.0:
         return motion, stages
     c = 1.0 / (3 * abs(lt) + 1.0)
-    m = motion_scale(motion, 0, max(stages.preparation, 1), c, "full")
-    m = motion_scale(m, stages.preparation, max(stages.anticipation, stages.preparation + 1), c, "full")
+    m = motion_scale(motion, 0, max(stages.preparation, 1), c, "full", keep_contacts=False)
+    m = motion_scale(m, stages.preparation, max(stages.anticipation, stages.preparation + 1), c, "full",
+                     keep_contacts=False)
+    m = _restore_contacts(motion, m) if m is not motion else m
     ant = 1.0 / (1.0 - 0.5 * lt) if lt >= 0 else 0.5 * lt + 1.0
     exe = (1.0 / (2 * lt + 1.0), 1.0 - 0.4 * lt) if lt >= 0 else (1.0 - 2 * lt, 1.0 - 0.4 * lt)
     f = stage_retiming(stages, motion.frame_time, {"anticipation": (ant, 1.0), "execution": exe})
