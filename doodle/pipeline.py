@@ -42,7 +42,7 @@ PROP_SIZE = 0.2  # metres: a 20 cm figurine plays a 1.7 m character
 
 
 @dataclass(frozen=True, eq=False)
-class Compiled:
+class Animation:
     """One track's animation and what went into it."""
 
     track: str
@@ -62,10 +62,11 @@ class Compiled:
 def compile_doodle(doodle: Doodle, library_dir=None, use_builtin: bool = True, params: SegmenterParams = SegmenterParams(),
                    fps: float = 30.0, scale: float | None = None, threshold: float = 2.0,
                    pin: bool = True, terrain=None, jump_arc: str = "clip", retime: str = "uniform",
-                   qualities: dict | None = None) -> list[Compiled]:
+                   qualities: dict | None = None) -> list[Animation]:
     """Every track of a doodle turned into an animation on one timeline (feet pinned in
     their contacts unless ``pin`` is False)."""
     from retarget.feet import clamp_to_ground, pin_feet
+    from retarget.skeleton import forward_kinematics
 
     from library.manifest import builtin as builtin_library
     from library.manifest import combine
@@ -117,9 +118,7 @@ def compile_doodle(doodle: Doodle, library_dir=None, use_builtin: bool = True, p
                     inside = (times[1:] > span.t0) & (times[1:] <= span.t1)
                     progress = np.concatenate([[0.0], np.cumsum(np.where(inside, step, 0.0))])
             pelvis = clip.roles["pelvis"]
-            from retarget.skeleton import forward_kinematics as _fk
-
-            hips = _fk(clip.motion)[0][:, pelvis][:, [0, 2]]
+            hips = forward_kinematics(clip.motion)[0][:, pelvis][:, [0, 2]]
             travels = not span.in_place and float(np.linalg.norm(hips[-1] - hips[0])) > 0.2
             gesture = gesture_timing(track, span) if retime == "gesture" and not span.cyclic else None
             pieces.append(Placed(span, clip.motion, pelvis, cycles, times, progress if travels else None, travels,
@@ -134,7 +133,7 @@ def compile_doodle(doodle: Doodle, library_dir=None, use_builtin: bool = True, p
                   for sp in spans]
         projected = (track.p - track.p[0]) * scale
         projected[:, 1] = 0.0 if terrain is None else terrain.height(projected[:, [0, 2]])
-        results.append(Compiled(track.name, motion, segments, tokens, frame_path, transitions, used, rest.roles,
+        results.append(Animation(track.name, motion, segments, tokens, frame_path, transitions, used, rest.roles,
                                 terrain, ranges, projected, styles))
     return results
 
@@ -262,7 +261,7 @@ def _compile_skeleton(library, user, clips):
     return skeleton, rest
 
 
-def quality(result: Compiled) -> dict:
+def quality(result: Animation) -> dict:
     """Report metrics: foot skating, ground penetration, root deviation from the path,
     transition smoothness."""
     roles = result.roles
