@@ -155,7 +155,7 @@ def cmd_compile(args) -> int:
     if args.time or args.weight:
         qualities.setdefault((None, None), (args.time, args.weight))
     results = compile_doodle(doodle, args.library, not args.no_builtin, params, args.fps, args.scale, args.threshold,
-                             not args.no_foot_pinning, terrain, args.jump_arc, args.retime, qualities)
+                             not args.no_foot_pinning, terrain, args.jump_arc, args.retime, qualities, args.style)
     out = Path(args.output)
     out.mkdir(parents=True, exist_ok=True)
     seconds = _seconds(doodle)
@@ -396,6 +396,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--time", type=float, default=0.0, help="Laban Time for every segment: sustained -1 … sudden 1")
     p.add_argument("--weight", type=float, default=0.0, help="Laban Weight for every segment: light -1 … strong 1")
     p.add_argument("--edits", metavar="FILE.json", help="per-segment time and weight (see README)")
+    p.add_argument("--style", choices=["modifiers", "preferred"], default="modifiers",
+                   help="Laban as the thesis's Time/Weight modifiers, or its study's preferred combination "
+                        "(gesture retiming + motion scale + reshaping)")
     p.add_argument("--retime", choices=["uniform", "gesture"], default="uniform",
                    help="one-shot clips at an even pace (default) or following the hand's own timing (5.3.3)")
     _segmenter_options(p)

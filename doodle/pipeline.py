@@ -62,7 +62,7 @@ class Animation:
 def compile_doodle(doodle: Doodle, library_dir=None, use_builtin: bool = True, params: SegmenterParams = SegmenterParams(),
                    fps: float = 30.0, scale: float | None = None, threshold: float = 2.0,
                    pin: bool = True, terrain=None, jump_arc: str = "clip", retime: str = "uniform",
-                   qualities: dict | None = None) -> list[Animation]:
+                   qualities: dict | None = None, style: str = "modifiers") -> list[Animation]:
     """Every track of a doodle turned into an animation on one timeline (feet pinned in
     their contacts unless ``pin`` is False)."""
     from retarget.feet import clamp_to_ground, pin_feet
@@ -95,7 +95,7 @@ def compile_doodle(doodle: Doodle, library_dir=None, use_builtin: bool = True, p
             action = library.action(name) if name in library.names else library.action(rest.action)
             lt, lw = _quality_of(qualities, track.name, index)
             if (lt or lw) and not action.cyclic and on_skeleton:
-                clip = _stylized(clip, lt, lw)
+                clip = _stylized(clip, lt, lw, style)
             styles.append((lt, lw) if (lt or lw) and not action.cyclic and on_skeleton else (0.0, 0.0))
             n = clip.motion.frames
             b = clip.stages.bounds()
@@ -120,7 +120,8 @@ def compile_doodle(doodle: Doodle, library_dir=None, use_builtin: bool = True, p
             pelvis = clip.roles["pelvis"]
             hips = forward_kinematics(clip.motion)[0][:, pelvis][:, [0, 2]]
             travels = not span.in_place and float(np.linalg.norm(hips[-1] - hips[0])) > 0.2
-            gesture = gesture_timing(track, span) if retime == "gesture" and not span.cyclic else None
+            by_hand = retime == "gesture" or (style == "preferred" and styles[len(pieces)] != (0.0, 0.0))
+            gesture = gesture_timing(track, span) if by_hand and not span.cyclic else None
             pieces.append(Placed(span, clip.motion, pelvis, cycles, times, progress if travels else None, travels,
                                  gesture=gesture))
         pieces = _transition_points(pieces, [clip for _, clip in placed])
@@ -165,12 +166,15 @@ def _quality_of(qualities: dict | None, track: str, index: int) -> tuple[float, 
     return 0.0, 0.0
 
 
-def _stylized(clip, lt: float, lw: float):
-    """The clip with Time then Weight applied, its stages moved with it."""
+def _stylized(clip, lt: float, lw: float, style: str = "modifiers"):
+    """The clip with Time then Weight applied, its stages moved with it (``style``
+    "preferred": motion scale and reshaping only, the timing left to the gesture)."""
     from dataclasses import replace as _replace
 
-    from retarget.stylize import time_modifier, weight_modifier
+    from retarget.stylize import preferred, time_modifier, weight_modifier
 
+    if style == "preferred":
+        return _replace(clip, motion=preferred(clip.motion, clip.stages, lt, lw))
     motion, stages = time_modifier(clip.motion, clip.stages, lt)
     motion = weight_modifier(motion, stages, lw)
     return _replace(clip, motion=motion, stages=stages)

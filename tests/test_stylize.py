@@ -147,3 +147,23 @@ def test_compile_applies_qualities_per_segment(tmp_path, capsys):
     edits.write_text('{"segments": [{"track": "c0", "index": 1, "time": 3}]}')
     assert main(["compile", str(demo), "-o", str(out), "--edits", str(edits)]) == 1
     assert "'time' must be a number in [-1, 1]" in capsys.readouterr().err
+
+
+def test_preferred_combination_keeps_timing_and_scales():
+    from retarget.stylize import preferred
+
+    clip, j = effector("Punch")
+    strong = preferred(clip.motion, clip.stages, 0.0, 1.0)
+    assert strong.frames == clip.motion.frames and strong.frame_time == clip.motion.frame_time
+    assert amplitude(strong, j) > amplitude(clip.motion, j)
+    assert preferred(clip.motion, clip.stages, 0.0, 0.0) is clip.motion
+
+
+def test_compile_with_the_preferred_style(tmp_path):
+    import json
+
+    demo = Path(__file__).resolve().parents[1] / "examples" / "demo.doodle"
+    out = tmp_path / "out"
+    assert main(["compile", str(demo), "-o", str(out), "--time", "0.5", "--weight", "0.5", "--style", "preferred"]) == 0
+    segs = json.loads((out / "report.json").read_text())["tracks"]["c0"]["segments"]
+    assert {(s["action"], s["time"], s["weight"]) for s in segs if s["time"]} == {("Jump", 0.5, 0.5), ("Stomp", 0.5, 0.5)}
