@@ -152,6 +152,11 @@ def cmd_compile(args) -> int:
     for name, value in (("--time", args.time), ("--weight", args.weight)):
         if not -1.0 <= value <= 1.0:
             raise DoodleError(f"{name} must be between -1 and 1, not {value:g}")
+    for name, value in (("--fps", args.fps), ("--scale", args.scale if args.scale is not None else 1.0)):
+        if not (value > 0 and value < float("inf")):
+            raise DoodleError(f"{name} must be a positive number, not {value:g}")
+    if not args.threshold >= 0:
+        raise DoodleError(f"--threshold must be 0 or more, not {args.threshold:g}")
     if args.time or args.weight:
         qualities.setdefault((None, None), (args.time, args.weight))
     results = compile_doodle(doodle, args.library, not args.no_builtin, params, args.fps, args.scale, args.threshold,
@@ -414,7 +419,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--compare", metavar="PNG", help="neutral and stylised side by side, with end-effector paths")
     p.set_defaults(run=cmd_stylize)
 
-    p = sub.add_parser("library", help="action libraries: list, show, check, import")
+    p = sub.add_parser("library", help="action libraries: list, show, check, sheet, import")
     lsub = p.add_subparsers(dest="library_command", required=True, metavar="list|show|check|sheet|import")
     for cmd, text in (("list", "every action with its flags and expression"),
                       ("check", "compile every expression and report overlapping actions")):

@@ -194,3 +194,10 @@ def test_gesture_retiming_follows_the_hand(tmp_path):
     assert fraction[0] == 0 and fraction[-1] == pytest.approx(1.0)
     assert np.interp(0.8, times, fraction) == pytest.approx(0.25, abs=0.02)
     assert main(["compile", str(DEMO), "-o", str(tmp_path / "out"), "--retime", "gesture"]) == 0
+
+
+@pytest.mark.parametrize("flag, value", [("--fps", "0"), ("--scale", "-2"), ("--threshold", "-1"), ("--time", "1.5")])
+def test_bad_compile_options_are_one_line(tmp_path, capsys, flag, value):
+    assert main(["compile", str(DEMO), "-o", str(tmp_path / "o"), flag, value]) == 1
+    err = capsys.readouterr().err
+    assert err.startswith("doodle: error:") and flag in err
