@@ -15,9 +15,10 @@
   (Fig. 2.2); with only two, anticipation/execution vs execution/follow-through is decided
   by whether the main direction of motion reverses between the two segments (§5.3.2);
   ends no extreme pose gives are the body's first and last movement. Measured against the
-  keyed stages of the built-in clips (``bench/stages_accuracy.py``) this heuristic is no
-  better than cutting the clip in five equal parts: manifests should state stages where
-  they are known.
+  keyed stages of the built-in clips (``bench/stages_accuracy.py``) that heuristic is no
+  better than cutting the clip in five equal parts, so the default is the alternative the
+  thesis proposes — optimal keyframe reduction by dynamic programming — which is a little
+  better; manifests should still state stages where they are known.
 * Cycles: the period of a cyclic clip is the lag of greatest self-similarity of its
   root-relative pose; its *cycle length* is the horizontal distance the root travels per
   period.
@@ -169,10 +170,49 @@ def _main_direction(motion: Motion, world: np.ndarray, a: int, b: int) -> np.nda
     return moved[k]
 
 
-def stages(motion: Motion, p: float = 0.15) -> Stages:
-    """The five animation stages of a clip (§5.3.2). Stages the extreme poses do not
-    delimit are bounded by the clip's first and last movement: the preparation ends where
-    the body starts to move, the follow-through where it stops."""
+def keyframe_stages(motion: Motion, most_frames: int = 90) -> Stages:
+    """Stages by optimal keyframe reduction (the alternative §5.3.2 proposes, after Roberts
+    et al. 2019): the four interior key poses that, with the first and last frame, best
+    reconstruct the clip's pelvis-relative pose by linear interpolation — dynamic
+    programming over frames (subsampled to at most ``most_frames``)."""
+    world = forward_kinematics(motion)[0]
+    x = _relative(motion, world).reshape(motion.frames, -1)
+    n = motion.frames
+    if n < 6:
+        return Stages(0, 0, n, n, n)
+    step = max(1, int(np.ceil(n / most_frames)))
+    idx = np.unique(np.concatenate([np.arange(0, n, step), [n - 1]]))
+    xs = x[idx]
+    m = len(xs)
+    err = np.full((m, m), np.inf)
+    for a in range(m - 1):
+        for b in range(a + 1, m):
+            w = np.linspace(0.0, 1.0, b - a + 1)[:, None]
+            err[a, b] = float(((xs[a : b + 1] - (xs[a] * (1 - w) + xs[b] * w)) ** 2).sum())
+    segments = 5
+    best = np.full((segments + 1, m), np.inf)
+    back = np.zeros((segments + 1, m), dtype=int)
+    best[0, 0] = 0.0
+    for j in range(1, segments + 1):
+        for b in range(1, m):
+            cost = best[j - 1, :b] + err[:b, b]
+            back[j, b] = int(np.argmin(cost))
+            best[j, b] = cost[back[j, b]]
+    keys, b = [], m - 1
+    for j in range(segments, 1, -1):
+        b = back[j, b]
+        keys.append(int(idx[b]))
+    return Stages(*sorted(keys), n)
+
+
+def stages(motion: Motion, p: float = 0.15, method: str = "keyframes") -> Stages:
+    """The five animation stages of a clip (§5.3.2): by optimal keyframe reduction
+    (default, :func:`keyframe_stages`) or by the thesis's extreme poses (``"extremes"``).
+    With extreme poses, stages they do not delimit are bounded by the clip's first and last
+    movement: the preparation ends where the body starts to move, the follow-through where
+    it stops."""
+    if method == "keyframes":
+        return keyframe_stages(motion)
     world = forward_kinematics(motion)[0]
     n = motion.frames
     speed, _ = body_speed(motion, world)
