@@ -1,6 +1,7 @@
 """Previews of a compiled animation: a plan view of the paths and a strip of key poses.
 
-* ``plan.png`` — seen from above (x to the right, z up the page): each track's root path,
+* ``plan.png`` — seen from above (forward, +z, up the page; the performer's left, +x, on
+  the left): each track's root path,
   coloured by action segment, over the projected doodle (grey) it was made from.
 * ``keyframes.png`` — per track, the character at the middle of every segment (side and
   front views), labelled with the frame; see :func:`retarget.sheet.contact_sheet`.
@@ -56,7 +57,8 @@ def plan_view(results, projected: dict, path) -> Path:
         ax.plot(*hips[0, [0, 2]], "o", color="black", ms=5)
         ax.annotate(r.track, hips[0, [0, 2]], textcoords="offset points", xytext=(4, 4), fontsize=8)
     ax.set_aspect("equal")
-    ax.set_xlabel("x (m, the performer's left)")
+    ax.invert_xaxis()  # seen from above with forward up the page, the performer's left (+x) is on the left
+    ax.set_xlabel("x (m, +x is the performer's left)")
     ax.set_ylabel("z (m, forward)")
     ax.legend(fontsize=7, loc="best")
     ax.grid(alpha=0.3)
