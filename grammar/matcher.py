@@ -46,12 +46,11 @@ apart two directions are: ``0.5 + 0.5·angle/π`` between tokens of the same kin
 
 from __future__ import annotations
 
-from collections import deque
 from dataclasses import dataclass
 
 import numpy as np
 
-from doodle.tokens import CODES, N_CODES, NAMES, Token, signs_of
+from doodle.tokens import CODES, N_CODES, Token, signs_of
 from grammar.automata import DFA
 
 UNKNOWN = "unknown"

@@ -32,10 +32,12 @@ def _angle(u: np.ndarray, v: np.ndarray) -> np.ndarray:
     return np.arccos(np.clip(np.sum(_unit(u) * _unit(v), axis=-1), -1.0, 1.0))
 
 
-def two_bone_ik(motion: Motion, hip: int, knee: int, ankle: int, target: np.ndarray, weight: np.ndarray) -> Motion:
+def two_bone_ik(motion: Motion, hip: int, knee: int, ankle: int, target: np.ndarray, weight: np.ndarray,
+                world: tuple | None = None) -> Motion:
     """The motion with the hip and knee rotated so the ankle reaches ``target`` (F, 3) where
-    ``weight`` (F,) is 1 (blended towards it in between, untouched at 0)."""
-    positions, world = forward_kinematics(motion)
+    ``weight`` (F,) is 1 (blended towards it in between, untouched at 0). ``world``: the
+    motion's forward kinematics if already known (only this leg's chain must be current)."""
+    positions, world = forward_kinematics(motion) if world is None else world
     a, b, c = positions[:, hip], positions[:, knee], positions[:, ankle]
     t = c + (target - c) * weight[:, None]
     lab = np.linalg.norm(b - a, axis=1)

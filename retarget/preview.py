@@ -48,7 +48,6 @@ def plan_view(results, projected: dict, path) -> Path:
         doodle = projected[r.track]
         ax.plot(doodle[:, 0], doodle[:, 2], color="#bbbbbb", lw=1, ls="--")
         hips = forward_kinematics(r.motion)[0][:, r.roles["pelvis"]]
-        times = np.arange(r.motion.frames) * r.motion.frame_time
         for k, s in enumerate(r.segments):
             a, b = r.frame_ranges[k]
             colour = colours(names.index(s.action) % 20)

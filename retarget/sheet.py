@@ -7,13 +7,12 @@ projections side by side: the side view (z forward to the right, y up) and the f
 right). Left limbs are blue, right limbs red, the spine
 black; the ground line is grey. Needs matplotlib (Agg backend).
 
-Command line: ``PYTHONPATH=. python3 library/builtin/sheet.py [out.png]`` renders every
-clip listed in ``library/builtin/clips.toml``.
+Command line: ``doodle library sheet [-o out.png] [--library DIR]`` draws every clip of a
+library at its stage ends.
 """
 
 from __future__ import annotations
 
-import sys
 from pathlib import Path
 
 import numpy as np

@@ -37,7 +37,6 @@ from __future__ import annotations
 from dataclasses import replace
 
 import numpy as np
-from scipy.spatial.transform import Rotation, Slerp
 
 from doodle import quat
 from doodle.quat import make_continuous
@@ -108,6 +107,7 @@ def _restore_contacts(before: Motion, after: Motion) -> Motion:
         return after
     old = forward_kinematics(before)[0]
     contact = foot_contacts(before, feet, world=old)
+    world = forward_kinematics(after)  # the legs are separate chains: one pass serves both
     for k, ankle in enumerate(feet):
         if not contact[:, k].any():
             continue
@@ -115,10 +115,9 @@ def _restore_contacts(before: Motion, after: Motion) -> Motion:
         hip = int(before.skeleton.parents[knee]) if knee >= 0 else -1
         if hip < 0:
             continue
-        new = forward_kinematics(after)[0][:, ankle]
-        target = new.copy()
+        target = world[0][:, ankle].copy()
         target[:, 1] = old[:, ankle, 1]
-        after = two_bone_ik(after, hip, knee, ankle, target, contact[:, k].astype(float))
+        after = two_bone_ik(after, hip, knee, ankle, target, contact[:, k].astype(float), world=world)
     return after
 
 
@@ -192,12 +191,9 @@ def reshape(motion: Motion, start: int, end: int, angle: float, shape: str = "ve
     rots = motion.rotations.copy()
     share = angle / max(len(bones), 1) if shape == "vertical" else angle
     for b in bones:
-        sign = 1.0
         name = motion.skeleton.names[b]
-        if shape == "horizontal" and ("left" in name.lower() or name.endswith("_L")):
-            sign = -1.0
-        shift = Rotation.from_rotvec(np.outer(w * share * sign, axis))
-        rots[:, b] = (Rotation.from_quat(rots[:, b]) * shift).as_quat()
+        sign = -1.0 if shape == "horizontal" and ("left" in name.lower() or name.endswith("_L")) else 1.0
+        rots[:, b] = quat.multiply(rots[:, b], quat.exp(np.outer(w * share * sign, axis)))
     return replace(motion, rotations=rots)
 
 

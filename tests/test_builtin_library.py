@@ -4,7 +4,6 @@ loads with its stages, and the contact sheet draws them."""
 import tomllib
 from pathlib import Path
 
-import numpy as np
 
 from doodle.cli import main
 from library.manifest import BUILTIN, builtin

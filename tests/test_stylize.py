@@ -10,7 +10,7 @@ from scipy.ndimage import gaussian_filter1d
 
 from doodle.cli import main
 from library.manifest import builtin
-from retarget.analysis import Stages, foot_contacts, stages
+from retarget.analysis import foot_contacts, stages
 from retarget.bvh import read_bvh
 from retarget.clips import load_clips
 from retarget.skeleton import forward_kinematics
