@@ -63,20 +63,26 @@ def compile_doodle(doodle: Doodle, library_dir=None, use_builtin: bool = True, p
                    fps: float = 30.0, scale: float | None = None, threshold: float = 2.0,
                    pin: bool = True, terrain=None, jump_arc: str = "clip", retime: str = "uniform",
                    qualities: dict | None = None, style: str = "modifiers") -> list[Animation]:
-    """Every track of a doodle turned into an animation on one timeline (feet pinned in
-    their contacts unless ``pin`` is False)."""
-    from retarget.feet import clamp_to_ground, pin_feet
-    from retarget.skeleton import forward_kinematics
+    """Every track of a doodle turned into an animation on one timeline.
 
+    Feet are pinned in their contacts unless ``pin`` is False. ``qualities`` maps
+    ``(track, segment index)`` — or ``(track, None)`` / ``(None, None)`` for every segment
+    of a track / of the doodle — to Laban ``(L_t, L_w)``, applied to one-shot clips as the
+    thesis's modifiers or, with ``style="preferred"``, as its study's preferred combination.
+    """
     from library.manifest import builtin as builtin_library
     from library.manifest import combine
     from retarget.clips import load_clips
+    from retarget.feet import clamp_to_ground, pin_feet
     from retarget.sequence import Placed, sequence
+    from retarget.skeleton import forward_kinematics
     from retarget.trajectory import Span, world_path
 
-    actions = load_actions(library_dir, use_builtin)
     user = load_library(library_dir) if library_dir else None
+    if not use_builtin and user is None:
+        raise DoodleError("--no-builtin needs --library DIR")
     library = combine(builtin_library() if use_builtin else None, user)
+    actions = compile_library(library)
     clips = load_clips(library)
     scale = CHARACTER_HEIGHT / PROP_SIZE if scale is None else scale
     results = []
@@ -100,17 +106,21 @@ def compile_doodle(doodle: Doodle, library_dir=None, use_builtin: bool = True, p
             n = clip.motion.frames
             b = clip.stages.bounds()
             execution = (b["execution"][0] / max(n - 1, 1), b["execution"][1] / max(n - 1, 1))
+            hips = forward_kinematics(clip.motion)[0][:, clip.roles["pelvis"]][:, [0, 2]]
+            travel = hips[-1] - hips[0]
+            travels = not action.in_place and float(np.linalg.norm(travel)) > 0.2  # a walk, a jump
             span = Span(seg.action, float(track.t[seg.start]), float(track.t[min(seg.end, len(track.t) - 1)]),
-                        seg.start, seg.end, action.in_place, action.jumping, action.cyclic, execution)
+                        seg.start, seg.end, action.in_place, action.jumping, action.cyclic, execution,
+                        float(np.arctan2(travel[0], travel[1])) if travels else 0.0)
             spans.append(span)
-            placed.append((span, clip))
+            placed.append((span, clip, travels))
             used[seg.action] = clip.path if on_skeleton else None
         path, heading = world_path(track.t, track.p, spans, scale, terrain, jump_arc)
         frame_path = np.column_stack([np.interp(times, track.t, path[:, k]) for k in range(3)])
         frame_heading = np.interp(times, track.t, heading)
         pieces = []
         step = np.linalg.norm(np.diff(frame_path[:, [0, 2]], axis=0), axis=1)
-        for span, clip in placed:
+        for span, clip, travels in placed:
             cycles, progress = 0.0, None
             if span.cyclic:
                 cycles = max((span.t1 - span.t0) / clip.motion.duration, 1.0)
@@ -118,13 +128,11 @@ def compile_doodle(doodle: Doodle, library_dir=None, use_builtin: bool = True, p
                     inside = (times[1:] > span.t0) & (times[1:] <= span.t1)
                     progress = np.concatenate([[0.0], np.cumsum(np.where(inside, step, 0.0))])
             pelvis = clip.roles["pelvis"]
-            hips = forward_kinematics(clip.motion)[0][:, pelvis][:, [0, 2]]
-            travels = not span.in_place and float(np.linalg.norm(hips[-1] - hips[0])) > 0.2
             by_hand = retime == "gesture" or (style == "preferred" and styles[len(pieces)] != (0.0, 0.0))
             gesture = gesture_timing(track, span) if by_hand and not span.cyclic else None
             pieces.append(Placed(span, clip.motion, pelvis, cycles, times, progress if travels else None, travels,
                                  gesture=gesture))
-        pieces = _transition_points(pieces, [clip for _, clip in placed])
+        pieces = _transition_points(pieces, [clip for _, clip, _ in placed])
         motion, transitions = sequence(pieces, times, frame_path[:, [0, 2]], frame_heading, skeleton, fps,
                                        ground_y=frame_path[:, 1])
         if pin:

@@ -21,7 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from retarget.skeleton import Motion, Skeleton
+from retarget.skeleton import Motion, Skeleton, forward_kinematics
 from retarget.trajectory import Span
 
 
@@ -46,11 +46,7 @@ class Placed:
 def travel_curve(motion: Motion, pelvis: int) -> np.ndarray:
     """Distance (m) the pelvis has travelled at each frame of a cyclic clip, along its net
     direction of travel, made non-decreasing."""
-    xz = motion.translations[:, pelvis][:, [0, 2]] if motion.skeleton.parents[pelvis] < 0 else None
-    if xz is None:
-        from retarget.skeleton import forward_kinematics
-
-        xz = forward_kinematics(motion)[0][:, pelvis][:, [0, 2]]
+    xz = forward_kinematics(motion)[0][:, pelvis][:, [0, 2]]
     net = xz[-1] - xz[0]
     norm = np.linalg.norm(net)
     if norm < 1e-6:
@@ -62,18 +58,18 @@ def _sample(motion: Motion, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Translations and rotations at clip times ``u`` (seconds), by interpolation."""
     f = np.clip(u / motion.frame_time, 0, motion.frames - 1)
     k = np.minimum(np.floor(f).astype(int), max(motion.frames - 2, 0))
-    w = (f - k)[:, None]
+    w = (f - k)[:, None, None]
     k1 = np.minimum(k + 1, motion.frames - 1)
-    trans = motion.translations[k] * (1 - w[:, :, None]) + motion.translations[k1] * w[:, :, None]
+    trans = motion.translations[k] * (1 - w) + motion.translations[k1] * w
     rots = _nlerp(motion.rotations[k], motion.rotations[k1], w)
     return trans, rots
 
 
 def _nlerp(a: np.ndarray, b: np.ndarray, w: np.ndarray) -> np.ndarray:
-    """Normalised linear interpolation of quaternions, shortest way (w broadcast per row)."""
+    """Normalised linear interpolation of quaternions, shortest way (``w`` broadcasts)."""
     dot = np.sum(a * b, axis=-1, keepdims=True)
     b = np.where(dot < 0, -b, b)
-    q = a * (1 - w[..., None]) + b * w[..., None] if w.ndim == a.ndim - 1 else a * (1 - w) + b * w
+    q = a * (1 - w) + b * w
     return q / np.linalg.norm(q, axis=-1, keepdims=True)
 
 

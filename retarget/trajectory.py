@@ -11,8 +11,9 @@ For each action segment, in order:
 4. a jumping action's horizontal travel is retimed to its execution stage: the root waits
    at the take-off point during preparation and anticipation and rests at the landing
    point during follow-through and transition (§5.2 "Retiming Jump trajectory");
-5. the heading follows the path's direction while the character travels and is held
-   while it acts in place.
+5. the heading follows the path's direction while the character travels — turned by the
+   clip's own direction of travel, so a side-step moves sideways and a walk back backwards
+   — and is held while it acts in place.
 
 The ground is any :mod:`retarget.terrain` (flat, height field, mesh): the path's height is
 the ground's under it (a ray cast along gravity).
@@ -39,6 +40,8 @@ class Span:
     jumping: bool
     cyclic: bool
     execution: tuple[float, float] = (0.0, 1.0)  # execution stage as fractions of the clip
+    travel_yaw: float = 0.0  # direction the clip travels, relative to where it faces (radians
+    # about +y): 0 walking forward, π/2 side-stepping left, π walking back
 
 
 JUMP_ALPHA = 2.5
@@ -130,13 +133,11 @@ def _heading(t: np.ndarray, path: np.ndarray, spans: list[Span]) -> np.ndarray:
     step = np.gradient(gaussian_filter1d(path, 3.0, axis=0, mode="nearest"), t, axis=0)
     speed = np.hypot(step[:, 0], step[:, 2])
     moving = speed > TURNING_SPEED
-    for s in spans:  # in place and sidesteps keep the heading; walking back faces away from travel
-        if s.in_place or "Side Walk" in s.action:
-            moving[s.i0:s.i1] = False
     yaw = np.arctan2(step[:, 0], step[:, 2])
-    for s in spans:
-        if "Walk Back" in s.action:
-            yaw[s.i0:s.i1] += np.pi
+    for s in spans:  # in place the heading is held; travelling, the clip's own direction counts
+        if s.in_place:
+            moving[s.i0:s.i1] = False
+        yaw[s.i0:s.i1] -= s.travel_yaw
     heading = np.zeros(n)
     current = float(yaw[np.flatnonzero(moving)[0]]) if moving.any() else 0.0
     for i in range(n):
