@@ -46,3 +46,13 @@ def test_library_sheet_draws_every_clip(tmp_path, capsys):
     assert image.shape[0] > 1000 and image.shape[1] > 500
     ink = (image[..., :3].mean(axis=2) < 0.5).mean()
     assert 0.002 < ink < 0.3  # figures are drawn, the page is not blank nor black
+
+
+def test_library_show_and_list(capsys):
+    assert main(["library", "show", "Walk"]) == 0
+    out = capsys.readouterr().out
+    assert "(T_Z | T_X_Z | T_N_X_Z)+" in out and "cyclic" in out and "stages: preparation 0-8" in out
+    assert main(["library", "list"]) == 0
+    assert len(capsys.readouterr().out.strip().splitlines()) == 28  # the recognisable actions
+    assert main(["library", "show", "Fly"]) == 1
+    assert "no action 'Fly'" in capsys.readouterr().err
