@@ -179,12 +179,11 @@ def _stylized(clip, lt: float, lw: float, style: str = "modifiers"):
     "preferred": motion scale and reshaping only, the timing left to the gesture)."""
     from dataclasses import replace as _replace
 
-    from retarget.stylize import preferred, time_modifier, weight_modifier
+    from retarget.stylize import preferred, stylize_staged
 
     if style == "preferred":
         return _replace(clip, motion=preferred(clip.motion, clip.stages, lt, lw))
-    motion, stages = time_modifier(clip.motion, clip.stages, lt)
-    motion = weight_modifier(motion, stages, lw)
+    motion, stages = stylize_staged(clip.motion, clip.stages, lt, lw)
     return _replace(clip, motion=motion, stages=stages)
 
 

@@ -18,22 +18,23 @@ def normalise(q: np.ndarray) -> np.ndarray:
 
 
 def hemisphere_signs(q: np.ndarray) -> np.ndarray:
-    """±1 per row so that ``signs[:, None] * q`` has no sign flips between neighbours.
+    """±1 per row so that ``signs[..., None] * q`` has no sign flips between neighbours.
 
     Row i is flipped relative to row i-1 when their dot product is negative (q and -q are
-    the same rotation; smoothing and differences need a continuous representative).
+    the same rotation; smoothing and differences need a continuous representative). ``q``
+    is (n, 4), or (n, ..., 4) for several sequences along axis 0 (one per joint, say).
     """
     if len(q) == 0:
-        return np.ones(0)
+        return np.ones(q.shape[:-1])
     a, b = q[1:], q[:-1]
-    dot = a[:, 0] * b[:, 0] + a[:, 1] * b[:, 1] + a[:, 2] * b[:, 2] + a[:, 3] * b[:, 3]
-    flips = np.concatenate([[False], dot < 0])
-    return np.where(np.cumsum(flips) % 2 == 1, -1.0, 1.0)
+    dot = a[..., 0] * b[..., 0] + a[..., 1] * b[..., 1] + a[..., 2] * b[..., 2] + a[..., 3] * b[..., 3]
+    flips = np.concatenate([np.zeros((1,) + dot.shape[1:], dtype=bool), dot < 0])
+    return np.where(np.cumsum(flips, axis=0) % 2 == 1, -1.0, 1.0)
 
 
 def make_continuous(q: np.ndarray) -> np.ndarray:
-    """``q`` with signs chosen so consecutive rows are in the same hemisphere."""
-    return q * hemisphere_signs(q)[:, None]
+    """``q`` with signs chosen so consecutive rows (along axis 0) are in the same hemisphere."""
+    return q * hemisphere_signs(q)[..., None]
 
 
 def multiply(a: np.ndarray, b: np.ndarray) -> np.ndarray:

@@ -65,12 +65,12 @@ def _bones(motion: Motion, mode: str) -> np.ndarray:
 
 
 def _slerp_identity(q: np.ndarray, w) -> np.ndarray:
-    """slerp(identity, q, w) for quaternions (F, 4) in time order: the rotation scaled by w.
-    The quaternions are made sign-continuous first, so a rotation passing half a turn keeps
-    growing (angle past π) instead of jumping when it is scaled."""
-    rv = quat.log(make_continuous(q.reshape(-1, 4)))
-    w = np.broadcast_to(np.asarray(w, dtype=float), rv.shape[:1])
-    return quat.exp(rv * w[:, None]).reshape(q.shape)
+    """slerp(identity, q, w) for quaternions (F, ..., 4) in time order: the rotation scaled
+    by w (a scalar or one weight per frame). The quaternions are made sign-continuous first,
+    so a rotation passing half a turn keeps growing (angle past π) instead of jumping."""
+    rv = quat.log(make_continuous(q))
+    w = np.asarray(w, dtype=float).reshape((-1,) + (1,) * (rv.ndim - 1))
+    return quat.exp(rv * w)
 
 
 def motion_scale(motion: Motion, start: int, end: int, c: float, mode: str = "partial",
@@ -81,21 +81,18 @@ def motion_scale(motion: Motion, start: int, end: int, c: float, mode: str = "pa
     end = min(end, motion.frames)
     bones = _bones(motion, mode)
     rots, trans = motion.rotations.copy(), motion.translations.copy()
-    for b in bones:
-        q0 = np.broadcast_to(rots[start, b], (end - start, 4))
-        r = quat.multiply(q0, quat.conjugate(rots[start:end, b]))  # q(ts) q(t)^-1
-        rots[start:end, b] = quat.multiply(quat.conjugate(_slerp_identity(r, c)), q0)
-        trans[start:end, b] = trans[start, b] + c * (trans[start:end, b] - trans[start, b])
+    q0 = np.broadcast_to(rots[start, bones], (end - start, len(bones), 4))
+    r = quat.multiply(q0, quat.conjugate(rots[start:end, bones]))  # q(ts) q(t)^-1
+    rots[start:end, bones] = quat.multiply(quat.conjugate(_slerp_identity(r, c)), q0)
+    trans[start:end, bones] = trans[start, bones] + c * (trans[start:end, bones] - trans[start, bones])
     if end < motion.frames:  # cohesion: the change at the end fades out over the rest
         last = end - 1
         w = 1.0 - (np.arange(end, motion.frames) - last) / max(motion.frames - 1 - last, 1)
-        for b in bones:
-            delta = quat.multiply(rots[last, b], quat.conjugate(motion.rotations[last, b]))
-            if delta[3] < 0:
-                delta = -delta
-            fade = quat.exp(quat.log(delta)[None] * w[:, None])
-            rots[end:, b] = quat.multiply(fade, rots[end:, b])
-            trans[end:, b] += np.outer(w, trans[last, b] - motion.translations[last, b])
+        delta = quat.multiply(rots[last, bones], quat.conjugate(motion.rotations[last, bones]))
+        delta = np.where(delta[:, 3:4] < 0, -delta, delta)
+        fade = quat.exp(quat.log(delta)[None] * w[:, None, None])
+        rots[end:, bones] = quat.multiply(fade, rots[end:, bones])
+        trans[end:, bones] += w[:, None, None] * (trans[last, bones] - motion.translations[last, bones])[None]
     out = replace(motion, rotations=rots, translations=trans)
     return _restore_contacts(motion, out) if keep_contacts else out
 
@@ -140,9 +137,9 @@ def retime(motion: Motion, clip_to_out, oversample: int = 1) -> Motion:
     k = np.minimum(np.floor(f).astype(int), motion.frames - 2)
     w = (f - k)[:, None, None]
     trans = motion.translations[k] * (1 - w) + motion.translations[k + 1] * w
-    q = np.stack([make_continuous(motion.rotations[:, j]) for j in range(len(motion.skeleton))], axis=1)
-    a, b = q[k], q[k + 1]
-    rots = quat.multiply(a, quat.exp(quat.log(quat.multiply(quat.conjugate(a), b)) * w))  # slerp
+    q = make_continuous(motion.rotations)
+    rots = q[k] * (1 - w) + q[k + 1] * w  # nlerp: neighbouring frames are degrees apart, where it equals slerp
+    rots /= np.linalg.norm(rots, axis=-1, keepdims=True)
     return replace(motion, translations=trans, rotations=rots, frame_time=step)
 
 
@@ -197,57 +194,86 @@ def reshape(motion: Motion, start: int, end: int, angle: float, shape: str = "ve
     return replace(motion, rotations=rots)
 
 
-def time_modifier(motion: Motion, stages: Stages, lt: float) -> tuple[Motion, Stages]:
-    """Sudden (L_t > 0) or Sustained (L_t < 0); returns the motion and its new stages."""
-    lt = float(np.clip(lt, -1.0, 1.0))
-    if lt == 0.0:
-        return motion, stages
+def _time_poses(motion: Motion, stages: Stages, lt: float) -> Motion:
+    """Time's motion scale: preparation and anticipation scaled down fully by 1/(3|L_t| + 1)."""
     c = 1.0 / (3 * abs(lt) + 1.0)
     m = motion_scale(motion, 0, max(stages.preparation, 1), c, "full", keep_contacts=False)
-    m = motion_scale(m, stages.preparation, max(stages.anticipation, stages.preparation + 1), c, "full",
-                     keep_contacts=False)
-    m = _restore_contacts(motion, m) if m is not motion else m
+    return motion_scale(m, stages.preparation, max(stages.anticipation, stages.preparation + 1), c, "full",
+                        keep_contacts=False)
+
+
+def _time_map(stages: Stages, frame_time: float, lt: float):
+    """Time's retiming (eq. 5.3): anticipation and execution rates for ``L_t``."""
     ant = 1.0 / (1.0 - 0.5 * lt) if lt >= 0 else 0.5 * lt + 1.0
     exe = (1.0 / (2 * lt + 1.0), 1.0 - 0.4 * lt) if lt >= 0 else (1.0 - 2 * lt, 1.0 - 0.4 * lt)
-    f = stage_retiming(stages, motion.frame_time, {"anticipation": (ant, 1.0), "execution": exe})
-    out = retime(m, f, oversample=_oversample(m))
-    ends = [stages.preparation, stages.anticipation, stages.execution, stages.follow_through]
-    new = [int(round(float(f(np.array([e * motion.frame_time]))[0]) / out.frame_time)) for e in ends]
-    new = list(np.minimum(np.maximum.accumulate(new), out.frames))
-    return out, Stages(*new, out.frames)
+    return stage_retiming(stages, frame_time, {"anticipation": (ant, 1.0), "execution": exe})
 
 
-def weight_modifier(motion: Motion, stages: Stages, lw: float, mode: str = "partial") -> Motion:
-    """Strong (L_w > 0) or Light (L_w < 0), duration kept."""
-    lw = float(np.clip(lw, -1.0, 1.0))
-    if lw == 0.0:
-        return motion
+def _weight_poses(motion: Motion, stages: Stages, lw: float) -> Motion:
+    """Weight's partial motion scale of the whole clip and its Vertical-shape shift."""
     c = 1.0 + lw if lw > 0 else 1.0 / (1.0 - lw)
-    m = motion_scale(motion, 0, motion.frames, c, mode)
-    world = forward_kinematics(m)[0]
-    step = np.linalg.norm(np.diff(world, axis=0), axis=2).mean(axis=1)
-    v = np.concatenate([step[:1], step]) / max(step.mean(), 1e-9)
+    m = motion_scale(motion, 0, motion.frames, c, "partial", keep_contacts=False)
+    return reshape(m, stages.anticipation, stages.execution, 0.1 * lw, "vertical")
+
+
+def _weight_times(motion: Motion, times: np.ndarray, lw: float) -> np.ndarray:
+    """Output time of each frame once Weight has retimed a motion whose frames already play
+    at ``times``: speed ∝ ``V_e^{α L_w}``, the duration kept (eq. 5.4–5.5)."""
+    world = forward_kinematics(motion)[0]
+    dt = np.maximum(np.diff(times), 1e-9)
+    speed = np.linalg.norm(np.diff(world, axis=0), axis=2).mean(axis=1) / dt
+    v = np.concatenate([speed[:1], speed]) / max(speed.mean(), 1e-9)
     if lw < 0:
         v = np.clip(v / max(v.max(), 1e-9), 0.05, 1.0)
     else:
         v = np.maximum(v, 0.05)
-    rate = np.clip(np.power(v, ALPHA_WEIGHT * lw), 1 / MAX_SPEEDUP, MAX_SPEEDUP)  # clip s per output s
-    dt_out = motion.frame_time / rate
-    dt_out *= (motion.frames - 1) * motion.frame_time / max(dt_out[1:].sum(), 1e-9)
-    out_times = np.concatenate([[0.0], np.cumsum(dt_out[1:])])
-    m = retime(m, lambda t: np.interp(t, np.arange(motion.frames) * motion.frame_time, out_times),
-               oversample=_oversample(m))
-    return reshape(m, stages.anticipation, stages.execution, 0.1 * lw, "vertical")
+    rate = np.clip(np.power(v[1:], ALPHA_WEIGHT * lw), 1 / MAX_SPEEDUP, MAX_SPEEDUP)  # clip s per output s
+    dt_out = dt / rate
+    dt_out *= (times[-1] - times[0]) / max(dt_out.sum(), 1e-9)
+    return times[0] + np.concatenate([[0.0], np.cumsum(dt_out)])
+
+
+def stylize_staged(motion: Motion, stages: Stages, lt: float = 0.0, lw: float = 0.0) -> tuple[Motion, Stages]:
+    """Time then Weight (§5.4.3), and the stages moved with the motion.
+
+    Both modifiers' pose edits (motion scales, reshaping) act on the clip's own frames; the
+    feet are put back on the ground once; Weight's retiming reads speeds as they play after
+    Time's; the two time maps are composed and the clip resampled once. Quaternions come
+    back sign-continuous per joint. ``L_t = L_w = 0`` returns the clip itself."""
+    lt, lw = float(np.clip(lt, -1.0, 1.0)), float(np.clip(lw, -1.0, 1.0))
+    if (lt == 0.0 and lw == 0.0) or motion.frames < 2:
+        return motion, stages
+    t = np.arange(motion.frames) * motion.frame_time
+    m, times = motion, t
+    if lt:
+        m = _time_poses(m, stages, lt)
+        times = _time_map(stages, motion.frame_time, lt)(t)
+    if lw:
+        m = _weight_poses(m, stages, lw)
+    m = _restore_contacts(motion, m)
+    if lw:
+        times = _weight_times(m, times, lw)
+    out = retime(m, lambda _: times, oversample=_oversample(m))
+    ends = np.array([stages.preparation, stages.anticipation, stages.execution, stages.follow_through])
+    at = np.interp(np.minimum(ends, motion.frames - 1) * motion.frame_time, t, times) - times[0]
+    new = np.minimum(np.maximum.accumulate(np.rint(at / out.frame_time).astype(int)), out.frames)
+    out = replace(out, rotations=make_continuous(out.rotations))
+    return out, Stages(*(int(k) for k in new), out.frames)
+
+
+def time_modifier(motion: Motion, stages: Stages, lt: float) -> tuple[Motion, Stages]:
+    """Sudden (L_t > 0) or Sustained (L_t < 0); returns the motion and its new stages."""
+    return stylize_staged(motion, stages, lt, 0.0)
+
+
+def weight_modifier(motion: Motion, stages: Stages, lw: float) -> Motion:
+    """Strong (L_w > 0) or Light (L_w < 0), duration kept."""
+    return stylize_staged(motion, stages, 0.0, lw)[0]
 
 
 def stylize(motion: Motion, stages: Stages, lt: float = 0.0, lw: float = 0.0) -> Motion:
-    """Time then Weight (§5.4.3); quaternions are returned sign-continuous per joint."""
-    m, st = time_modifier(motion, stages, lt)
-    m = weight_modifier(m, st, lw)
-    if m is motion:
-        return motion
-    rots = np.stack([make_continuous(m.rotations[:, j]) for j in range(len(m.skeleton))], axis=1)
-    return replace(m, rotations=rots)
+    """Time then Weight (§5.4.3): :func:`stylize_staged` without the stages."""
+    return stylize_staged(motion, stages, lt, lw)[0]
 
 
 def preferred(motion: Motion, stages: Stages, lt: float = 0.0, lw: float = 0.0) -> Motion:
