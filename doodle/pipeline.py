@@ -100,9 +100,11 @@ def compile_doodle(doodle: Doodle, library_dir=None, use_builtin: bool = True, p
             name = seg.action if seg.action in library.names else "Idle"
             action = library.action(name) if name in library.names else library.action(rest.action)
             lt, lw = _quality_of(qualities, track.name, index)
-            if (lt or lw) and not action.cyclic and on_skeleton:
-                clip = _stylized(clip, lt, lw, style)
-            styles.append((lt, lw) if (lt or lw) and not action.cyclic and on_skeleton else (0.0, 0.0))
+            if action.cyclic:
+                lt = 0.0  # a cycle's pace is the hand's travel: Time has nothing to retime
+            if (lt or lw) and on_skeleton:
+                clip = _stylized(clip, lt, lw, style, action.cyclic)
+            styles.append((lt, lw) if (lt or lw) and on_skeleton else (0.0, 0.0))
             n = clip.motion.frames
             b = clip.stages.bounds()
             execution = (b["execution"][0] / max(n - 1, 1), b["execution"][1] / max(n - 1, 1))
@@ -174,13 +176,16 @@ def _quality_of(qualities: dict | None, track: str, index: int) -> tuple[float, 
     return 0.0, 0.0
 
 
-def _stylized(clip, lt: float, lw: float, style: str = "modifiers"):
+def _stylized(clip, lt: float, lw: float, style: str = "modifiers", cycle: bool = False):
     """The clip with Time then Weight applied, its stages moved with it (``style``
-    "preferred": motion scale and reshaping only, the timing left to the gesture)."""
+    "preferred": motion scale and reshaping only, the timing left to the gesture; a
+    ``cycle`` gets Weight's swing and posture only)."""
     from dataclasses import replace as _replace
 
-    from retarget.stylize import preferred, stylize_staged
+    from retarget.stylize import cyclic, preferred, stylize_staged
 
+    if cycle:
+        return _replace(clip, motion=cyclic(clip.motion, lw))
     if style == "preferred":
         return _replace(clip, motion=preferred(clip.motion, clip.stages, lt, lw))
     motion, stages = stylize_staged(clip.motion, clip.stages, lt, lw)

@@ -30,6 +30,7 @@ from __future__ import annotations
 
 import re
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 from scipy.ndimage import gaussian_filter1d
@@ -50,15 +51,20 @@ ROLE_PATTERNS = {
 
 def guess_roles(skeleton: Skeleton) -> dict[str, int]:
     """Role → joint index for the roles whose joint name follows a known convention."""
-    roles = {}
-    lowered = [n.lower() for n in skeleton.names]
+    return dict(_roles_of(tuple(skeleton.names)))
+
+
+@lru_cache(maxsize=256)
+def _roles_of(names: tuple[str, ...]) -> tuple[tuple[str, int], ...]:
+    roles = []
+    lowered = [n.lower() for n in names]
     for role, patterns in ROLE_PATTERNS.items():
         for pattern in patterns:
             hits = [i for i, n in enumerate(lowered) if re.match(pattern, n)]
             if hits:
-                roles[role] = hits[0]
+                roles.append((role, hits[0]))
                 break
-    return roles
+    return tuple(roles)
 
 
 def _chain(skeleton: Skeleton, ancestor: int, joint: int) -> list[int]:

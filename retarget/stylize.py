@@ -37,6 +37,9 @@ from __future__ import annotations
 from dataclasses import replace
 
 import numpy as np
+from scipy.interpolate import PchipInterpolator
+from scipy.ndimage import gaussian_filter1d
+from scipy.sparse import csr_matrix
 
 from doodle import quat
 from doodle.quat import make_continuous
@@ -46,6 +49,8 @@ from retarget.skeleton import Motion, forward_kinematics
 
 ALPHA_WEIGHT = 1.5
 OVERSAMPLE = 4  # retimed output has 4× a 30 fps clip's frame rate: frames at most 1/120 s apart
+EDIT_SMOOTHING = 0.05  # s: pose edits are low-passed over this much clip time
+RATE_SMOOTHING = 0.04  # s: the playback rate's changes are smoothed over this much clip time
 MAX_SPEEDUP = 3.0  # Weight retiming plays no frame more than 3× faster (or slower) than the clip
 
 
@@ -74,8 +79,9 @@ def _slerp_identity(q: np.ndarray, w) -> np.ndarray:
 
 
 def motion_scale(motion: Motion, start: int, end: int, c: float, mode: str = "partial",
-                 keep_contacts: bool = True) -> Motion:
-    """Eq. 5.1 over frames [start, end), cohesion (eq. 5.2) after it, contacts restored."""
+                 keep_contacts: bool = True, smooth: bool = True) -> Motion:
+    """Eq. 5.1 over frames [start, end), cohesion (eq. 5.2) after it, the edit smoothed
+    (:func:`smooth_edit`) and contacts restored."""
     if c == 1.0 or end - start < 2:
         return motion
     end = min(end, motion.frames)
@@ -94,7 +100,27 @@ def motion_scale(motion: Motion, start: int, end: int, c: float, mode: str = "pa
         rots[end:, bones] = quat.multiply(fade, rots[end:, bones])
         trans[end:, bones] += w[:, None, None] * (trans[last, bones] - motion.translations[last, bones])[None]
     out = replace(motion, rotations=rots, translations=trans)
+    if smooth:
+        out = smooth_edit(motion, out, bones)
     return _restore_contacts(motion, out) if keep_contacts else out
+
+
+def smooth_edit(original: Motion, edited: Motion, bones: np.ndarray | None = None) -> Motion:
+    """The edit (edited pose relative to the original, per bone and frame) low-passed over
+    ``EDIT_SMOOTHING`` seconds: a motion scale switches on and off at its range's ends,
+    and a step in a bone's velocity there is a jerk spike the clip never had."""
+    sigma = EDIT_SMOOTHING / original.frame_time
+    if original.frames < 3 or sigma < 0.3:
+        return edited
+    bones = np.arange(len(original.skeleton)) if bones is None else bones
+    orig_q, orig_t = original.rotations[:, bones], original.translations[:, bones]
+    delta = quat.log(make_continuous(quat.multiply(edited.rotations[:, bones], quat.conjugate(orig_q))))
+    delta = gaussian_filter1d(delta, sigma, axis=0, mode="nearest")
+    shift = gaussian_filter1d(edited.translations[:, bones] - orig_t, sigma, axis=0, mode="nearest")
+    rots, trans = edited.rotations.copy(), edited.translations.copy()
+    rots[:, bones] = quat.multiply(quat.exp(delta), orig_q)
+    trans[:, bones] = orig_t + shift
+    return replace(edited, rotations=rots, translations=trans)
 
 
 def _restore_contacts(before: Motion, after: Motion) -> Motion:
@@ -121,7 +147,12 @@ def _restore_contacts(before: Motion, after: Motion) -> Motion:
 def retime(motion: Motion, clip_to_out, oversample: int = 1) -> Motion:
     """The motion re-sampled after mapping clip time t to output time ``clip_to_out(t)``
     (non-decreasing on the clip's frame times), at ``oversample`` times its frame rate —
-    so a stage squeezed into a few frames keeps its shape."""
+    so a stage squeezed into a few frames keeps its shape.
+
+    Both the inverse time map (monotone cubic) and the poses (Catmull–Rom spline through the
+    frames; quaternions sign-continuous, then normalised) are interpolated smoothly: linear
+    interpolation would play a slowed clip as straight pieces with a velocity kink at every
+    original frame, which is a train of jerk spikes."""
     if motion.frames < 2:
         return motion
     t = np.arange(motion.frames) * motion.frame_time
@@ -129,18 +160,32 @@ def retime(motion: Motion, clip_to_out, oversample: int = 1) -> Motion:
     out = out - out[0]
     if out[-1] <= 0:
         return motion
+    out = out + np.arange(motion.frames) * 1e-9  # strictly increasing for the inverse
     step = motion.frame_time / oversample
     n = int(np.floor(out[-1] / step + 1e-9)) + 1
     new_t = np.minimum(np.arange(n) * step, out[-1])
-    clip_t = np.interp(new_t, out, t)
-    f = np.clip(clip_t / motion.frame_time, 0, motion.frames - 1)
-    k = np.minimum(np.floor(f).astype(int), motion.frames - 2)
-    w = (f - k)[:, None, None]
-    trans = motion.translations[k] * (1 - w) + motion.translations[k + 1] * w
-    q = make_continuous(motion.rotations)
-    rots = q[k] * (1 - w) + q[k + 1] * w  # nlerp: neighbouring frames are degrees apart, where it equals slerp
-    rots /= np.linalg.norm(rots, axis=-1, keepdims=True)
-    return replace(motion, translations=trans, rotations=rots, frame_time=step)
+    clip_t = np.clip(PchipInterpolator(out, t)(new_t), 0.0, t[-1])
+    poses = _catmull_rom(np.concatenate([motion.translations, make_continuous(motion.rotations)], axis=2),
+                         clip_t / motion.frame_time)
+    rots = poses[..., 3:] / np.linalg.norm(poses[..., 3:], axis=-1, keepdims=True)
+    return replace(motion, translations=np.ascontiguousarray(poses[..., :3]), rotations=rots, frame_time=step)
+
+
+def _catmull_rom(frames: np.ndarray, f: np.ndarray) -> np.ndarray:
+    """Frames (F, ...) at fractional frame indices ``f``: the Catmull–Rom spline through
+    them (C¹, passes through every frame, ends clamped), as one sparse matrix product —
+    four weights per output row."""
+    last = len(frames) - 1
+    f = np.clip(f, 0.0, last)
+    k = np.minimum(np.floor(f).astype(int), max(last - 1, 0))
+    u = f - k
+    u2, u3 = u * u, u * u * u
+    weights = np.stack([0.5 * (-u + 2 * u2 - u3), 0.5 * (2 - 5 * u2 + 3 * u3),
+                        0.5 * (u + 4 * u2 - 3 * u3), 0.5 * (u3 - u2)], axis=1)
+    cols = np.clip(k[:, None] + np.arange(-1, 3)[None], 0, last)
+    rows = np.repeat(np.arange(len(f)), 4)
+    w = csr_matrix((weights.ravel(), (rows, cols.ravel())), shape=(len(f), len(frames)))
+    return (w @ frames.reshape(len(frames), -1)).reshape((len(f),) + frames.shape[1:])
 
 
 def _oversample(motion: Motion) -> int:
@@ -197,9 +242,9 @@ def reshape(motion: Motion, start: int, end: int, angle: float, shape: str = "ve
 def _time_poses(motion: Motion, stages: Stages, lt: float) -> Motion:
     """Time's motion scale: preparation and anticipation scaled down fully by 1/(3|L_t| + 1)."""
     c = 1.0 / (3 * abs(lt) + 1.0)
-    m = motion_scale(motion, 0, max(stages.preparation, 1), c, "full", keep_contacts=False)
+    m = motion_scale(motion, 0, max(stages.preparation, 1), c, "full", keep_contacts=False, smooth=False)
     return motion_scale(m, stages.preparation, max(stages.anticipation, stages.preparation + 1), c, "full",
-                        keep_contacts=False)
+                        keep_contacts=False, smooth=False)
 
 
 def _time_map(stages: Stages, frame_time: float, lt: float):
@@ -212,7 +257,7 @@ def _time_map(stages: Stages, frame_time: float, lt: float):
 def _weight_poses(motion: Motion, stages: Stages, lw: float) -> Motion:
     """Weight's partial motion scale of the whole clip and its Vertical-shape shift."""
     c = 1.0 + lw if lw > 0 else 1.0 / (1.0 - lw)
-    m = motion_scale(motion, 0, motion.frames, c, "partial", keep_contacts=False)
+    m = motion_scale(motion, 0, motion.frames, c, "partial", keep_contacts=False, smooth=False)
     return reshape(m, stages.anticipation, stages.execution, 0.1 * lw, "vertical")
 
 
@@ -233,6 +278,18 @@ def _weight_times(motion: Motion, times: np.ndarray, lw: float) -> np.ndarray:
     return times[0] + np.concatenate([[0.0], np.cumsum(dt_out)])
 
 
+def _smooth_rate(times: np.ndarray, frame_time: float) -> np.ndarray:
+    """The time map with its playback rate smoothed over about ``RATE_SMOOTHING`` seconds
+    (in the log domain, the duration kept): eq. 5.3 changes rate abruptly where stages
+    meet, and a step in playback speed is a spike of jerk that no performer would make."""
+    dt = np.maximum(np.diff(times), 1e-9)
+    if len(dt) < 3 or RATE_SMOOTHING <= 0:
+        return times
+    log_rate = gaussian_filter1d(np.log(dt), RATE_SMOOTHING / frame_time, mode="nearest")
+    dt = np.exp(log_rate) * (times[-1] - times[0]) / np.exp(log_rate).sum()
+    return times[0] + np.concatenate([[0.0], np.cumsum(dt)])
+
+
 def stylize_staged(motion: Motion, stages: Stages, lt: float = 0.0, lw: float = 0.0) -> tuple[Motion, Stages]:
     """Time then Weight (§5.4.3), and the stages moved with the motion.
 
@@ -250,9 +307,10 @@ def stylize_staged(motion: Motion, stages: Stages, lt: float = 0.0, lw: float = 
         times = _time_map(stages, motion.frame_time, lt)(t)
     if lw:
         m = _weight_poses(m, stages, lw)
-    m = _restore_contacts(motion, m)
+    m = _restore_contacts(motion, smooth_edit(motion, m))
     if lw:
         times = _weight_times(m, times, lw)
+    times = _smooth_rate(times, motion.frame_time)
     out = retime(m, lambda _: times, oversample=_oversample(m))
     ends = np.array([stages.preparation, stages.anticipation, stages.execution, stages.follow_through])
     at = np.interp(np.minimum(ends, motion.frames - 1) * motion.frame_time, t, times) - times[0]
@@ -291,3 +349,44 @@ def preferred(motion: Motion, stages: Stages, lt: float = 0.0, lw: float = 0.0) 
         m = motion_scale(m, 0, m.frames, 1.0 + lw if lw > 0 else 1.0 / (1.0 - lw), "partial")
         m = reshape(m, stages.anticipation, stages.execution, 0.1 * lw, "vertical")
     return m
+
+
+def cyclic(motion: Motion, lw: float = 0.0) -> Motion:
+    """Weight on a cyclic clip (a walk): its pace comes from the hand's travel, so there is
+    no retiming and no Time; the upper body (spine, arms, head) swings ``1 + L_w`` (Strong) or
+    ``1/(1 − L_w)`` (Light) times as far about each bone's mean pose over the cycle — not
+    about frame 0, so the stride stays symmetric and the loop closes — and the posture sinks
+    or rises by ``0.1 L_w``. The legs are left alone: their stride is what the clip's
+    distance per cycle and the feet's contacts rest on."""
+    lw = float(np.clip(lw, -1.0, 1.0))
+    if lw == 0.0 or motion.frames < 3:
+        return motion
+    c = 1.0 + lw if lw > 0 else 1.0 / (1.0 - lw)
+    bones = _upper_body(motion)
+    rots, trans = motion.rotations.copy(), motion.translations.copy()
+    q = make_continuous(rots[:, bones])
+    mean = q.mean(axis=0)
+    mean /= np.linalg.norm(mean, axis=-1, keepdims=True)
+    mean = np.broadcast_to(mean, q.shape)
+    rel = quat.multiply(quat.conjugate(mean), q)  # each frame relative to the mean pose
+    rots[:, bones] = quat.multiply(mean, _slerp_identity(rel, c))
+    centre = trans[:, bones].mean(axis=0)
+    trans[:, bones] = centre + c * (trans[:, bones] - centre)
+    out = reshape(replace(motion, rotations=rots, translations=trans), 0, motion.frames, 0.1 * lw, "vertical", fade=0)
+    return out
+
+
+def _upper_body(motion: Motion) -> np.ndarray:
+    """Bones a cycle's Weight acts on: every one :func:`_bones` would scale fully, less the
+    legs (the pelvis's children off the spine, and everything under them)."""
+    bones = set(_bones(motion, "full").tolist())
+    roles = guess_roles(motion.skeleton)
+    if {"pelvis", "chest", "head"} <= set(roles):
+        spine = partition(motion.skeleton, roles["pelvis"], roles["chest"], roles["head"])["spine"]
+        stack = [c for c in motion.skeleton.children(roles["pelvis"]) if c not in spine]
+        while stack:
+            b = stack.pop()
+            bones.discard(b)
+            stack.extend(motion.skeleton.children(b))
+    return np.array(sorted(bones), dtype=int)
+

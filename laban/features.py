@@ -1,0 +1,303 @@
+"""Kinematic features of a hand trajectory segment (thesis §4.3; summaries §4.4.1, sets Table 4.3).
+
+Pipeline (:func:`kinematics`):
+
+1. **Resample** uniformly in time at ``rate`` (default: the segment's median rate), at least
+   :data:`MIN_SAMPLES` points: positions linearly, orientations by normalised linear
+   interpolation of sign-continuous quaternions (nlerp; steps are one sample, so it equals
+   slerp to well below tracking noise). This absorbs jittered timestamps.
+2. **Differentiate** with Savitzky–Golay cubic fits over a window of :data:`WINDOW_S`
+   seconds (so the filter is rate independent); at the ends the fit of the first / last
+   window is evaluated (scipy's ``mode="interp"``). A segment shorter than the window uses
+   one fit over all its samples.
+3. **Global (world) features** ``Ve = (v_e, ω)`` and its derivatives ``Ae``, ``Je``:
+   ``v_e, a, j = ṗ, p̈, p⃛``; ``ω`` from the quaternion log of relative rotations,
+   ``ω_{i+½} = log(q_{i+1} q_i⁻¹)/Δt`` (world axes, never Euler differences), averaged onto
+   the samples and then smoothed and differentiated like ``p``.
+4. **Moving frame** (figurine axes left, up, front): ``v = R_iᵀ v_e`` and its time
+   derivatives ``v̇, v̈`` (derivatives of the components, as the thesis feeds them).
+5. **Geometry**, regularised so that slow or straight motion never divides by zero:
+
+   * curvature ``κ = |v_e × a| / (|v_e|² + ε²)^{3/2}``, ε = :data:`EPS_SPEED` = 0.05 m/s —
+     exact ``|v_e × a|/|v_e|³`` above ~0.5 m/s (< 1.5 % low), 0 for a still hand;
+   * torsion ``τ = [v_e, a, j] / (|v_e × a|² + ε'²)``, ε' = ε·:data:`EPS_ACCEL` =
+     0.05 m²/s³ (a 0.05 m/s motion turning at 1 m/s²); signed (right-handed helix > 0);
+   * equi-affine speed ``V_a = |[v_e, a, j]|^{1/6}`` (m^½/s; 0 for any planar curve —
+     the 3-D definition) and ``A_a = dV_a/dt`` by the same smoothing differentiator
+     (not the analytic formula, whose ``1/6`` power is singular at 0).
+
+:func:`summary` gives the ~50 per-segment features of §4.4.1 (:data:`SUMMARY_NAMES`), and
+:func:`sequence` the per-sample columns of Table 4.3 resampled to a fixed length (HMM input).
+Both compress the heavy-tailed κ and τ as ``log1p(κ)`` and ``sign(τ)·log1p(|τ|)`` (κ, τ in
+1/m); :class:`Kinematics` holds them raw.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from functools import lru_cache
+
+import numpy as np
+from numpy.lib.stride_tricks import as_strided
+
+from doodle import quat
+
+WINDOW_S = 0.12  # s, Savitzky–Golay window (11 samples at 90 Hz)
+ORDER = 3  # cubic fits: up to the third derivative (jerk)
+MIN_SAMPLES = 5  # resampled length floor, so a cubic can be fitted to 2- or 3-sample segments
+DEFAULT_RATE = 90.0  # Hz, for a single-sample segment
+EPS_SPEED = 0.05  # m/s, speed floor in κ and in the speed variation
+EPS_ACCEL = 1.0  # m/s², with EPS_SPEED the floor of |v × a| in τ
+EPS_CROSS = EPS_SPEED * EPS_ACCEL  # m²/s³
+EPS_JERK = 1.0  # m/s³, floor of the mean jerk in "Jerk Peak Ratio"
+EPS_AFFINE = 0.1  # m^½/s, floor of the mean V_a in the equi-affine ratios
+TINY = 1e-9  # below this (m/s, m/s³, m) a peak or a path is numerical noise
+
+
+@dataclass(frozen=True, eq=False)
+class Kinematics:
+    """Per-sample features on the uniform grid ``t`` (n,). Norms are world-frame; ``local_*``
+    are (n, 3) in figurine axes (left, up, front); ``curvature`` and ``torsion`` in 1/m."""
+
+    t: np.ndarray
+    speed: np.ndarray  # |v_e|, m/s
+    accel: np.ndarray  # |a|, m/s²
+    jerk: np.ndarray  # |j|, m/s³
+    ang_speed: np.ndarray  # |ω|, rad/s
+    ang_accel: np.ndarray  # |ω̇|, rad/s²
+    ang_jerk: np.ndarray  # |ω̈|, rad/s³
+    local_v: np.ndarray  # v = Rᵀ v_e
+    local_a: np.ndarray  # v̇
+    local_j: np.ndarray  # v̈
+    curvature: np.ndarray
+    torsion: np.ndarray
+    affine_speed: np.ndarray  # V_a
+    affine_accel: np.ndarray  # A_a
+
+
+_FACTORIALS = np.array([math.factorial(d) for d in range(ORDER + 1)], float)
+
+
+@lru_cache(maxsize=64)
+def _operators(w: int) -> tuple[np.ndarray, np.ndarray]:
+    """Least-squares cubic fit over ``w`` samples centred on 0: ``proj`` (4, w) maps a window
+    to polynomial coefficients; ``ev[d]`` (w, 4) evaluates the d-th derivative at each offset."""
+    offs = np.arange(w, dtype=float) - w // 2
+    proj = np.linalg.pinv(np.vander(offs, ORDER + 1, increasing=True))
+    k = np.arange(ORDER + 1)
+    ev = np.stack(
+        [np.array([math.perm(kk, d) for kk in k], float) * offs[:, None] ** np.maximum(k - d, 0) for d in k]
+    )
+    return proj, ev
+
+
+def _derivatives(x: np.ndarray, dt: float, count: int) -> np.ndarray:
+    """Savitzky–Golay estimates (count, m, c) of derivatives 0..count-1 of the columns of
+    ``x`` (m, c), m ≥ 5, sampled every ``dt`` s; equals ``savgol_filter(x, w, 3, deriv=d,
+    delta=dt, mode="interp", axis=0)`` for the odd window ``w`` nearest :data:`WINDOW_S` (≤ m)."""
+    m, c = x.shape
+    w = min(max(MIN_SAMPLES, 2 * int(round(WINDOW_S / dt / 2)) + 1), m - 1 + m % 2)
+    h, n = w // 2, m - w + 1
+    proj, ev = _operators(w)
+    xt = np.ascontiguousarray(x.T)
+    windows = as_strided(xt, (c, n, w), (xt.strides[0], xt.strides[1], xt.strides[1]), writeable=False)
+    coef = (windows.reshape(-1, w) @ proj.T).reshape(c, n, ORDER + 1)  # cubic per window
+    out = np.empty((count, m, c))
+    out[:, h : m - h] = (coef[:, :, :count] * _FACTORIALS[:count]).transpose(2, 1, 0)
+    out[:, :h] = ev[:count, :h] @ coef[:, 0].T  # first window's cubic at the first h samples
+    out[:, m - h :] = ev[:count, h + 1 :] @ coef[:, -1].T
+    return out / (dt ** np.arange(count))[:, None, None]
+
+
+def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    return np.stack(
+        [
+            a[:, 1] * b[:, 2] - a[:, 2] * b[:, 1],
+            a[:, 2] * b[:, 0] - a[:, 0] * b[:, 2],
+            a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0],
+        ],
+        axis=-1,
+    )
+
+
+def _norm(x: np.ndarray) -> np.ndarray:
+    return np.sqrt(np.einsum("ij,ij->i", x, x))
+
+
+def _resample(t: np.ndarray, grid: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """Linear interpolation of the rows of ``x`` (n, c), sampled at ``t``, at ``grid`` ⊂ [t0, t_end]."""
+    i = np.clip(np.searchsorted(t, grid, side="right") - 1, 0, len(t) - 2)
+    a = ((grid - t[i]) / (t[i + 1] - t[i]))[:, None]
+    return x[i] + a * (x[i + 1] - x[i])
+
+
+def kinematics(t: np.ndarray, p: np.ndarray, q: np.ndarray, rate: float | None = None) -> Kinematics:
+    """Per-sample kinematic features of a segment (§4.3), see the module docstring.
+
+    ``t`` (n,) strictly increasing seconds, ``p`` (n, 3) metres, ``q`` (n, 4) world-from-
+    figurine quaternions (x, y, z, w; any norm or sign). ``rate`` (Hz) is the resampling
+    rate, by default ``1 / median(Δt)``. A single sample is treated as a still segment.
+    """
+    t = np.asarray(t, float).ravel()
+    p = np.asarray(p, float).reshape(-1, 3)
+    q = quat.make_continuous(quat.normalise(np.asarray(q, float).reshape(-1, 4)))
+    if len(t) == 0 or len(p) != len(t) or len(q) != len(t):
+        raise ValueError("kinematics needs t, p, q with the same, non-zero number of samples")
+    if len(t) == 1:
+        t = np.array([t[0], t[0] + 1.0 / (rate or DEFAULT_RATE)])
+        p, q = np.repeat(p, 2, axis=0), np.repeat(q, 2, axis=0)
+    steps = np.diff(t)
+    if not np.all(steps > 0):
+        raise ValueError("timestamps must be strictly increasing")
+    duration = t[-1] - t[0]
+    rate = float(rate) if rate else 1.0 / float(np.median(steps))
+    m = max(MIN_SAMPLES, int(round(duration * rate)) + 1)
+    grid = np.linspace(t[0], t[-1], m)
+    dt = duration / (m - 1)
+    pq = _resample(t, grid, np.hstack([p, q]))
+    pg, qg = pq[:, :3], quat.normalise(pq[:, 3:])
+
+    r = quat.multiply(qg[1:], quat.conjugate(qg[:-1]))  # q_{i+1} = r q_i: world-frame step
+    r = np.where(r[:, 3:4] < 0, -r, r)
+    om = quat.log(r) / dt
+    om = np.concatenate([om[:1], 0.5 * (om[1:] + om[:-1]), om[-1:]])
+
+    x0, x1, x2, x3 = _derivatives(np.hstack([pg, om]), dt, ORDER + 1)
+    ve, ae, je = x1[:, :3], x2[:, :3], x3[:, :3]
+    speed = _norm(ve)
+    c = _cross(ve, ae)
+    c2 = np.einsum("ij,ij->i", c, c)
+    triple = np.einsum("ij,ij->i", c, je)
+    va = np.abs(triple) ** (1.0 / 6.0)
+    local_v = quat.rotate_inverse(qg, ve)
+    y0, y1, y2 = _derivatives(np.hstack([local_v, va[:, None]]), dt, 3)
+    return Kinematics(
+        t=grid,
+        speed=speed,
+        accel=_norm(ae),
+        jerk=_norm(je),
+        ang_speed=_norm(x0[:, 3:]),
+        ang_accel=_norm(x1[:, 3:]),
+        ang_jerk=_norm(x2[:, 3:]),
+        local_v=local_v,
+        local_a=y1[:, :3],
+        local_j=y2[:, :3],
+        curvature=np.sqrt(c2) / (speed * speed + EPS_SPEED**2) ** 1.5,
+        torsion=triple / (c2 + EPS_CROSS**2),
+        affine_speed=va,
+        affine_accel=y1[:, 3],
+    )
+
+
+def _log_curvature(k: Kinematics) -> np.ndarray:
+    return np.log1p(k.curvature)
+
+
+def _log_torsion(k: Kinematics) -> np.ndarray:
+    return np.sign(k.torsion) * np.log1p(np.abs(k.torsion))
+
+
+_AXES = ("Left", "Up", "Front")
+_LOCAL = tuple(f"Local {q} {a}" for q in ("Speed", "Accel", "Jerk") for a in _AXES)
+_NORMS = ("Speed", "Acceleration", "Jerk", "Angular Speed", "Angular Accel", "Angular Jerk")
+_AFFINE = ("Equi-Affine Speed", "Equi-Affine Accel", "Curvature", "Torsion")
+
+FEATURE_SETS: dict[str, tuple[str, ...]] = {
+    "euclidean": _NORMS,  # ‖Ve‖ ‖Ae‖ ‖Je‖, linear and angular (Ve = (v_e, ω))
+    "affine": _AFFINE,  # V_a A_a κ τ — κ as log1p(κ), τ as sign(τ)·log1p(|τ|)
+    "moving": _LOCAL,  # v v̇ v̈, 3 components each
+}
+"""Per-sample column names of Table 4.3's feature sets, in :func:`sequence`'s column order."""
+
+_STATS = _LOCAL + _NORMS + _AFFINE
+SUMMARY_NAMES: tuple[str, ...] = tuple(f"{f} {s}" for f in _STATS for s in ("Mean", "Stdev")) + (
+    "Duration",  # s
+    "Path Length",  # m, ∫|v_e| dt
+    "Amplitude",  # m, twice the largest distance from the centroid (rotation invariant)
+    "Straightness",  # chord / path length, in [0, 1] (0 for a still hand)
+    "Peak Speed",  # m/s
+    "Peak Speed Time",  # time of the peak speed / duration, in [0, 1]
+    "Peak Jerk",  # m/s³
+    "Peak Jerk Time",  # time of the peak jerk / duration (onset impulse of Sudden motion)
+    "Speed Variation",  # std |v_e| / max(mean |v_e|, EPS_SPEED)
+    "Jerk Peak Ratio",  # max |j| / max(mean |j|, EPS_JERK) (impulsiveness)
+    "Equi-Affine Speed Variation",  # std V_a / max(mean V_a, EPS_AFFINE) (Weight: uniformity)
+    "Equi-Affine Accel Ratio",  # mean |A_a| / max(mean V_a, EPS_AFFINE), 1/s
+)
+"""Names of :func:`summary`'s features (§4.4.1, Table 4.2 naming): the mean and standard
+deviation of each per-sample feature over the segment's uniform time grid, then twelve
+Time / Weight descriptors. Curvature and Torsion statistics are **speed-weighted**
+(``Σ|v_e|x / Σ|v_e|``, i.e. per unit arc length, so a still hand does not dominate) and
+taken on the log1p scale (``log1p(κ)``, ``sign(τ)·log1p(|τ|)``)."""
+
+
+def _peak(x: np.ndarray, floor: float) -> tuple[float, float]:
+    """``(max, relative index of the max)``; a max below ``floor`` is noise: ``(max, 0)``."""
+    i = int(np.argmax(x))
+    return float(x[i]), (i / (len(x) - 1) if x[i] >= floor else 0.0)
+
+
+def summary(t: np.ndarray, p: np.ndarray, q: np.ndarray) -> np.ndarray:
+    """The (len(SUMMARY_NAMES),) summary features of a segment, all finite (§4.4.1)."""
+    k = kinematics(t, p, q)
+    cols = np.column_stack(
+        [k.local_v, k.local_a, k.local_j, k.speed, k.accel, k.jerk, k.ang_speed, k.ang_accel, k.ang_jerk,
+         k.affine_speed, k.affine_accel]
+    )
+    mean, std = cols.mean(axis=0), cols.std(axis=0)
+    total = k.speed.sum()
+    w = k.speed / total if total > TINY else np.full(len(k.speed), 1.0 / len(k.speed))
+    geo = np.column_stack([_log_curvature(k), _log_torsion(k)])
+    gmean = w @ geo
+    gstd = np.sqrt(np.maximum(w @ (geo - gmean) ** 2, 0.0))
+    stats = np.column_stack([np.append(mean, gmean), np.append(std, gstd)]).ravel()
+
+    p = np.asarray(p, float).reshape(-1, 3)
+    duration = float(k.t[-1] - k.t[0]) if len(np.asarray(t).ravel()) > 1 else 0.0
+    dt = np.diff(k.t)
+    path = float(np.sum(0.5 * (k.speed[1:] + k.speed[:-1]) * dt))
+    chord = float(np.linalg.norm(p[-1] - p[0]))
+    amplitude = 2.0 * float(np.max(_norm(p - p.mean(axis=0))))
+    peak_v, peak_v_time = _peak(k.speed, TINY)
+    peak_j, peak_j_time = _peak(k.jerk, TINY)
+    i_v, i_j, i_va = _STATS.index("Speed"), _STATS.index("Jerk"), _STATS.index("Equi-Affine Speed")
+    va_mean = max(mean[i_va], EPS_AFFINE)
+    extra = [
+        duration,
+        path,
+        amplitude,
+        chord / max(path, chord, TINY),
+        peak_v,
+        peak_v_time,
+        peak_j,
+        peak_j_time,
+        std[i_v] / max(mean[i_v], EPS_SPEED),
+        peak_j / max(mean[i_j], EPS_JERK),
+        std[i_va] / va_mean,
+        float(np.abs(k.affine_accel).mean()) / va_mean,
+    ]
+    return np.concatenate([stats, extra])
+
+
+def sequence(
+    t: np.ndarray,
+    p: np.ndarray,
+    q: np.ndarray,
+    sets: tuple[str, ...] = ("euclidean", "affine", "moving"),
+    points: int = 512,
+) -> np.ndarray:
+    """(points, d) HMM input (§4.4.2): the columns of :data:`FEATURE_SETS` for ``sets``, in
+    that order, linearly resampled to ``points`` rows uniformly spaced in time."""
+    k = kinematics(t, p, q)
+    blocks = {
+        "euclidean": lambda: [k.speed, k.accel, k.jerk, k.ang_speed, k.ang_accel, k.ang_jerk],
+        "affine": lambda: [k.affine_speed, k.affine_accel, _log_curvature(k), _log_torsion(k)],
+        "moving": lambda: [k.local_v, k.local_a, k.local_j],
+    }
+    unknown = set(sets) - set(blocks)
+    if unknown or not sets:
+        raise ValueError(f"feature sets must be among {sorted(blocks)}, got {list(sets)}")
+    x = np.column_stack([c for s in sets for c in blocks[s]()])
+    grid = np.linspace(k.t[0], k.t[-1], points)
+    return _resample(k.t, grid, x)
