@@ -483,8 +483,8 @@ def format_rows(rows: np.ndarray, n_tracks: int, chunk: int = 20000) -> Iterator
         yield "".join(fmt % tuple(r) for r in rows[start : start + chunk].tolist())
 
 
-def atomic_write(path, chunks: Iterable[str]) -> None:
-    """Write the text ``chunks`` to ``path`` atomically: a temporary file in the same
+def atomic_write(path, chunks: Iterable[str] | bytes) -> None:
+    """Write the text ``chunks`` (or one ``bytes``) to ``path`` atomically: a temporary file in the same
     directory, fsync, then ``os.replace``. On any exception the temporary file is removed,
     an existing ``path`` is untouched, and the exception propagates (OSError becomes
     DoodleError).
@@ -496,8 +496,9 @@ def atomic_write(path, chunks: Iterable[str]) -> None:
     except OSError as exc:
         raise DoodleError(f"{path}: cannot write: {exc.strerror or exc}") from None
     try:
-        with os.fdopen(fd, "w", encoding="utf-8", newline="\n") as fh:
-            for text in chunks:
+        binary = isinstance(chunks, bytes)
+        with (os.fdopen(fd, "wb") if binary else os.fdopen(fd, "w", encoding="utf-8", newline="\n")) as fh:
+            for text in [chunks] if binary else chunks:
                 fh.write(text)
             fh.flush()
             os.fsync(fh.fileno())

@@ -19,53 +19,59 @@ Models, and where they come from
   *loop* a sideways stroke with one loop in its middle; *c_shape* a 260° arc opening to the
   performer's right; *screw* a helix of 2.5 turns along the forward axis; *zigzag* five
   strokes alternating up and down; *hip* — our reading of Fig. 4.22(h): a hip sway, the hand
-  swinging side to side along a U-shaped arc that bulges forward at the bottom and back along
-  a shallower one (a thin crescent); *triangle* (apex up, closed); *come_forth* a beckoning
+  swinging across along a U-shaped arc that bulges forward at the bottom and back along a
+  nearly flat one (a bowl with its lid); *triangle* (apex up, closed); *come_forth* a beckoning
   pull from arm's length up, back toward the body and curling down (sagittal plane);
   *thrust* a forward push and return slightly lower. Free-style curves are sums of three
   random low-frequency 3D sinusoids (flatter in depth). The path is scaled to the performer's
   size (0.25–0.45 m), tilted and yawed by their habitual drawing plane, mirrored for
   left-handers and placed in front of them.
-* **Time** (sets duration and the speed envelope g(τ), τ ∈ [0, 1]). *Sustained*: 2–4 s,
-  a smooth symmetric plateau whose rise and fall are minimum-jerk steps
+* **Time** (sets the duration and the onset of the speed envelope g(τ), τ ∈ [0, 1]).
+  *Sustained*: nominally 2.6–4.0 s; g rises and falls with minimum-jerk steps,
   ``g = s(τ/r)·s((1−τ)/r)`` with ``s`` the Flash & Hogan (1985) profile
-  (``doodle.synth.min_jerk``) and r ≈ 0.2–0.4 — no impulse anywhere. *Sudden*: 0.3–0.8 s,
-  an impulsive onset — a minimum-jerk rise over only 5–15 % of the movement — then a decay,
-  ``g = s(τ/r)·(1−τ)^k`` (k ≈ 1.6–2.4), so the speed peaks in the first fifth and peak jerk
-  is early and high (the thesis's "great impulse (jerk peak) at the beginning", §4.3).
-  Durations also scale with the pattern's length, the performer's tempo and how strongly
-  they express Time.
-* **Weight** (sets amplitude and how speed is spread along the path inside the envelope).
-  *Light*: amplitude × 0.70–0.85 and constant equi-affine speed — the path is traversed
-  uniformly in its equi-affine arc length ``dσ = κ^(1/3) ds``, the 1/3 power law of
-  drawing (Lacquaniti, Terzuolo & Viviani 1983, "The law relating the kinematic and figural
-  aspects of drawing movements", Acta Psychologica 54:115–130; Pollick & Sapiro 1997,
-  "Constant affine velocity predicts the 1/3 power law of planar motion perception and
-  generation", Vision Research 37(3):347–353). So that straight segments (κ = 0) keep a
-  finite speed we use Viviani & Schneider's (1991) modified law, ``dσ = (κ + κ₀)^(1/3) ds``
-  with κ₀ = 1 per pattern unit (J. Exp. Psychol. HPP 17(1):198–218). *Strong*: amplitude
-  × 1.15–1.30 and non-uniform speed: Euclidean arc length (ignoring curvature) modulated by
-  1–4 Gaussian speed bursts (height up to ×8 over the base speed, each at least 45 ms wide),
-  so equi-affine speed varies with bursts that curvature does not explain.
+  (``doodle.synth.min_jerk``) and r ≈ 0.2–0.4: smooth, symmetric, no impulse anywhere.
+  *Sudden*: nominally 0.35–0.75 s, with an impulsive onset — the minimum-jerk rise takes
+  only 5–20 % of the movement (15–150 ms) — so peak jerk is high and comes early (the
+  thesis's "great impulse (jerk peak) at the beginning", §4.3). Durations also scale with
+  the pattern's length (× 0.8–1.25), the performer's tempo and how strongly they express
+  Time (nominal 0.75 s and 2.6 s at the weakest, 0.35 s and 4.0 s at the strongest).
+* **Weight** (sets the amplitude and how uniform the speed is inside the envelope).
+  Along the path both Elements follow the 1/3 power law of drawing, speed ∝ κ^(−1/3), i.e.
+  the path is traversed in its equi-affine arc length ``dσ = κ^(1/3) ds`` (Lacquaniti,
+  Terzuolo & Viviani 1983, "The law relating the kinematic and figural aspects of drawing
+  movements", Acta Psychologica 54:115–130; Pollick & Sapiro 1997, "Constant affine velocity
+  predicts the 1/3 power law of planar motion perception and generation", Vision Research
+  37(3):347–353); so that straight segments (κ = 0) keep a finite speed we use Viviani &
+  Schneider's (1991) modified law ``dσ = (κ + κ₀)^(1/3) ds``, κ₀ = 1 per pattern unit
+  (J. Exp. Psychol. HPP 17(1):198–218). Hands slow down in tight bends, whatever the Weight.
+  *Light*: amplitude × 0.70–0.85 and a flat envelope — after the rise, constant equi-affine
+  speed until a soft minimum-jerk stop (over 20–40 % of the movement, 30–50 % after a
+  Sudden onset). *Strong*: amplitude × 1.15–1.30 and non-uniform equi-affine speed that
+  curvature does not explain: Sustained Strong multiplies the envelope with 2–4 Gaussian
+  speed bursts (up to ×8 the base speed, each at least 45 ms wide); Sudden Strong puts all
+  its speed into the impulse and then brakes, ``g = s(τ/r)·(1−τ)^k`` (k ≈ 2–3), so its
+  speed peaks in the first fifth and decays.
   *Which equi-affine speed.* The thesis uses the 3D speed ``|[ẋ, ẍ, x⃛]|^(1/6)`` and its
   1/6 law (Pollick, Maoz, Handzel, Giblin, Sapiro & Flash 2009, "Three-dimensional arm
-  movements at constant equi-affine speed", Cortex 45(3):325–339). For planar patterns
-  (most of Fig. 4.22) the torsion is zero and that quantity collapses to noise, so the
-  Weight timing is defined with the speed in the osculating plane, ``|ẋ × ẍ|^(1/3)`` (the 2D
-  equi-affine speed of a planar curve); for the screw (constant κ and τ) both laws give
-  the same timing. Classifiers and tests should measure ``|ẋ × ẍ|^(1/3)``.
+  movements at constant equi-affine speed", Cortex 45(3):325–339). Most patterns of
+  Fig. 4.22 are planar, where the torsion is zero and that quantity collapses to noise, so
+  the timing uses the speed in the osculating plane, ``|ẋ × ẍ|^(1/3)`` (the 2D equi-affine
+  speed of a planar curve); for the screw (constant κ and τ) both laws give the same timing.
+  Measure Weight with ``|ẋ × ẍ|^(1/3)``; the 3D quantity only sees Indirect wander.
 * **Space.** *Direct*: the pattern drawn cleanly — straight segments straight, planar.
   *Indirect*: the same pattern with meandering detours: three smooth sinusoidal wanders
-  (1.2–2.5 cycles per pattern unit of arc length, random 3D directions, tangential part
-  removed so they are lateral and out-of-plane) of 4–8 % of the pattern size each, tapered
-  to zero at both ends so the detour still starts and ends where the pattern does, plus a
-  twisting hand (roll and yaw of 0.1–0.4 rad, 0.3–0.8 cycles per pattern unit) — higher,
-  varying curvature and torsion (thesis §4.3, Fig. 4.16).
+  (0.8–1.6 cycles per pattern unit of arc length, but at most ~4 per second so they stay
+  within voluntary bandwidth; random 3D directions with the tangential part removed, so
+  lateral and out-of-plane) of 7–12 % of the pattern size each, tapered to zero at both ends
+  so the detour still starts and ends where the pattern does; and a twisting hand (roll and
+  yaw of 0.15–0.35 rad, pitch half that, following the same arc length) — higher, varying
+  curvature and torsion (thesis §4.3, Fig. 4.16). Expression scales both.
 * **Orientation.** The prop is held upright facing forward (identity) with the performer's
-  grip offset (≤ 0.15 rad) and a small smooth wobble (sum of sin(jπτ), zero at both ends,
-  ≤ 0.02–0.05 rad). Indirect adds the twist above; Strong adds wrist rotation bursts,
-  0.15–0.6 rad of alternating sign, as normal-CDF steps centred on the speed bursts, so
-  angular speed peaks with linear speed. Quaternions are unit and sign-continuous.
+  grip offset (≤ 0.08 rad per axis) and a small smooth wobble (sum of sin(jπτ), zero at both
+  ends, ≤ 0.02–0.05 rad). Indirect adds the twist above; Strong adds a wrist turn and back
+  (Gaussian, 0.15–0.6 rad, about a random wrist axis) with each speed burst, or with the
+  Sudden impulse, so angular speed peaks with linear speed. Quaternions are unit and
+  sign-continuous (w ≥ 0 at the start).
 * **People and takes.** A :class:`Person` holds one performer's habits: size, tempo, how
   strongly they express each Factor (0.5–1.0 — weaker expression brings the two Elements
   closer), ramp and onset fractions, drawing-plane tilt and yaw, handedness, grip and noise
@@ -93,7 +99,6 @@ from functools import lru_cache
 
 import numpy as np
 from scipy.ndimage import gaussian_filter1d
-from scipy.special import ndtr
 
 from doodle import quat
 from doodle.synth import ORIENTATION_LEVER, min_jerk
@@ -119,7 +124,7 @@ class Person:
     size: float  # pattern size, m
     tempo: float  # duration multiplier
     expression: tuple[float, float, float]  # how strongly Space, Time, Weight are shown, 0.5–1
-    ramp: float  # Sustained rise/fall fraction of the movement
+    ramp: float  # minimum-jerk rise/fall as a fraction of the movement
     onset: float  # Sudden rise fraction of the movement
     decay: float  # Sudden decay exponent
     tilt: float  # drawing plane tilted back about the x axis, rad
@@ -143,11 +148,12 @@ def person(rng: np.random.Generator) -> Person:
         expression=tuple(float(e) for e in rng.uniform(0.5, 1.0, 3)),
         ramp=float(rng.uniform(0.2, 0.4)),
         onset=float(rng.uniform(0.05, 0.15)),
-        decay=float(rng.uniform(1.6, 2.4)),
+        decay=float(rng.uniform(2.0, 3.0)),
         tilt=float(rng.uniform(-0.3, 0.3)),
         yaw=float(rng.uniform(-0.3, 0.3)),
         hand=hand,
-        centre=(float(-hand * rng.uniform(0.05, 0.2)), float(rng.uniform(1.0, 1.3)), float(rng.uniform(0.3, 0.45))),
+        centre=(float(-hand * rng.uniform(0.05, 0.2)), float(rng.uniform(1.0, 1.3)),
+                float(rng.uniform(0.3, 0.45))),
         grip=tuple(float(g) for g in rng.uniform(-0.08, 0.08, 3)),
         wobble=float(rng.uniform(0.02, 0.05)),
         tremor=float(rng.uniform(0.0003, 0.0008)),
@@ -217,9 +223,9 @@ def _build(pattern: str) -> np.ndarray:
         return _frontal(-0.45 * np.cos(th), 0.45 * np.sin(th))
     if pattern == "line":  # diagonal, lower left to upper right, and back just below
         d = np.array([np.cos(0.5), np.sin(0.5)])
-        n = np.array([d[1], -d[0]]) * 0.05
+        n = np.array([d[1], -d[0]]) * 0.08
         a, b = -0.45 * d, 0.45 * d
-        return _rounded(_frontal(*np.array([a, b, b + n, a + n]).T), 0.025)
+        return _rounded(_frontal(*np.array([a, b, b + n, a + n]).T), 0.04)
     if pattern == "lemniscate":
         return _frontal(0.5 * np.sin(2 * np.pi * u), 0.22 * np.sin(4 * np.pi * u))
     if pattern == "loop":  # a sideways stroke, one loop up and around, leaving a little behind
@@ -235,20 +241,20 @@ def _build(pattern: str) -> np.ndarray:
         return _frontal(0.2 * np.sin(th), 0.2 * np.cos(th), 0.7 * (u - 0.5))
     if pattern == "zigzag":
         r = np.linspace(-0.5, 0.5, 6)
-        return _rounded(_frontal(r, 0.18 * (-1.0) ** np.arange(6)), 0.02)
+        return _rounded(_frontal(r, 0.18 * (-1.0) ** np.arange(6)), 0.035)
     if pattern == "hip":  # swing down-forward across, back along a shallower arc
         th = 2 * np.pi * u
-        return _frontal(-0.5 * np.cos(th), -0.065 * np.sin(th) - 0.185 * np.sin(th) ** 2,
+        return _frontal(-0.5 * np.cos(th), -0.15 * np.sin(th) - 0.12 * np.sin(th) ** 2,
                         0.15 * np.sin(th) ** 2)
     if pattern == "triangle":
         a = np.pi / 2 + np.radians([0.0, 120.0, 240.0])
-        return _rounded(_frontal(-0.5 * np.cos(a), 0.5 * np.sin(a) - 0.1), 0.03, closed=True)
+        return _rounded(_frontal(-0.5 * np.cos(a), 0.5 * np.sin(a) - 0.1), 0.04, closed=True)
     if pattern == "come_forth":  # sagittal plane: (forward, up)
         zy = np.array([[0.5, 0.0], [0.3, 0.22], [0.0, 0.3], [-0.22, 0.18], [-0.3, 0.0]])
         return _rounded(np.stack([np.zeros(5), zy[:, 1], zy[:, 0]], axis=1), 0.12)
     if pattern == "thrust":  # forward push, return slightly lower
-        zy = np.array([[-0.3, 0.0], [0.4, 0.02], [0.4, -0.04], [-0.3, -0.06]])
-        return _rounded(np.stack([np.zeros(4), zy[:, 1], zy[:, 0]], axis=1), 0.025)
+        zy = np.array([[-0.3, 0.0], [0.4, 0.02], [0.4, -0.06], [-0.3, -0.08]])
+        return _rounded(np.stack([np.zeros(4), zy[:, 1], zy[:, 0]], axis=1), 0.04)
     raise AssertionError(pattern)
 
 
@@ -265,10 +271,10 @@ def _free_shape(rng: np.random.Generator) -> np.ndarray:
 # --------------------------------------------------------------------------- internals
 
 
-def _check(pattern: str | None, drive: str, rate: float) -> None:
+def _check(pattern: str | None, drive: str | None, rate: float) -> None:
     if pattern is not None and pattern not in PATTERNS:
         raise ValueError(f"unknown pattern {pattern!r}; valid patterns: {', '.join(PATTERNS)}")
-    if drive not in DRIVES:
+    if drive is not None and drive not in DRIVES:
         raise ValueError(f"unknown drive {drive!r}; valid drives: {', '.join(DRIVES)}")
     if not (rate > 0 and math.isfinite(rate)):
         raise ValueError(f"rate must be positive and finite, got {rate!r}")
@@ -306,12 +312,12 @@ def _perform(unit: np.ndarray, length: float, drive: str, who: Person, rng: np.r
     e_space, e_time, e_weight = who.expression
     v = who.vary
 
-    def var(k: int = 1):
+    def var(k: int | None = None):  # take-to-take variation factor(s)
         return 1.0 + rng.uniform(-v, v, k)
 
     # Time: duration.
-    lo, hi = ((0.75, 0.35) if time > 0 else (2.2, 3.6))
-    duration = who.tempo * length * (lo + (hi - lo) * (e_time - 0.5) / 0.5) * float(var()[0])
+    lo, hi = ((0.75, 0.35) if time > 0 else (2.6, 4.0))
+    duration = who.tempo * length * (lo + (hi - lo) * (e_time - 0.5) / 0.5) * var()
 
     # Path geometry in pattern units: take-to-take aspect, then Space.
     x = _uniform(unit * var(3))
@@ -330,42 +336,37 @@ def _perform(unit: np.ndarray, length: float, drive: str, who: Person, rng: np.r
         wander -= np.einsum("ij,ij->i", wander, tangent)[:, None] * tangent
         x = x + wander * window
         axes = np.array([[0.0, 0.0, 1.0], [0.0, 1.0, 0.0], [1.0, 0.0, 0.0]])
-        amp = rng.uniform(0.2, 0.4, 3) * e_space * np.array([1.0, 1.0, 0.5])
+        amp = rng.uniform(0.15, 0.35, 3) * e_space * np.array([1.0, 1.0, 0.5])
         f = np.minimum(rng.uniform(0.3, 0.8, 3), 2.0 * duration / L)
         twist = (np.sin(2 * np.pi * f * s[:, None] + rng.uniform(0, 2 * np.pi, 3)) * amp) @ axes * window
 
-    # Weight: how the path is parametrised (progress measure), amplitude.
+    # Progress measure along the path: modified equi-affine arc length; amplitude.
     d1, d2 = _derivatives(x)
     ds = np.linalg.norm(d1, axis=1)
-    if weight < 0:
-        kappa = np.linalg.norm(np.cross(d1, d2), axis=1) / np.maximum(ds, 1e-12) ** 3
-        dsig = np.cbrt(kappa + _KAPPA0) * ds
-    else:
-        dsig = ds
+    kappa = np.linalg.norm(np.cross(d1, d2), axis=1) / np.maximum(ds, 1e-12) ** 3
+    dsig = np.cbrt(kappa + _KAPPA0) * ds
     sig = np.concatenate([[0.0], np.cumsum(0.5 * (dsig[1:] + dsig[:-1]))])
     sig /= sig[-1]
-    amplitude = who.size * float(var()[0]) * (1.0 + 0.3 * e_weight * weight)
+    amplitude = who.size * var() * (1.0 + 0.3 * e_weight * weight)
 
     # Speed envelope: Time sets the rise, Weight how uniform the rest is.
     tau = np.linspace(0.0, 1.0, 1001)
-    ramp = who.ramp * float(var()[0])
-    onset = who.onset * (1.6 - 1.2 * (e_time - 0.5)) if time > 0 else ramp
+    ramp = who.ramp * var()
+    onset = who.onset * (1.3 - 0.6 * (e_time - 0.5)) if time > 0 else ramp
     g = min_jerk(tau / onset)
-    if time > 0 and weight > 0:  # one impulse, then braking
+    if time > 0 and weight > 0:  # one impulse, then braking; the wrist snaps with it
         g = g * (1.0 - tau) ** who.decay
-    else:
-        g = g * min_jerk((1.0 - tau) / ramp)
-    if time > 0 and weight > 0:  # the wrist snaps with the impulse
         bursts = np.array([[tau[np.argmax(g)], max(0.7 * onset, 0.045 / duration)]])
-    elif weight > 0:  # speed bursts along the path
+    else:  # flat, then a soft minimum-jerk stop (softer still after a Sudden onset)
+        g = g * min_jerk((1.0 - tau) / (ramp + (0.1 if time > 0 else 0.0)))
+        bursts = np.zeros((0, 2))
+    if time < 0 and weight > 0:  # speed bursts along the path
         k = int(rng.integers(2, 5))
         centres = 0.12 + 0.76 * (np.arange(k) + 0.5 + rng.uniform(-0.3, 0.3, k)) / k
         widths = np.maximum(rng.uniform(0.035, 0.06, k), 0.045 / duration)
         bursts = np.stack([centres, widths], axis=1)
         g = g * ((1.0 - 0.6 * e_weight) + 3.0 * e_weight * np.exp(
             -0.5 * ((tau[:, None] - centres) / widths) ** 2).sum(axis=1))
-    else:
-        bursts = np.zeros((0, 2))
     prog = np.concatenate([[0.0], np.cumsum(0.5 * (g[1:] + g[:-1]))])
     prog /= prog[-1]
 
@@ -396,12 +397,11 @@ def _perform(unit: np.ndarray, length: float, drive: str, who: Person, rng: np.r
     rv += np.sin(np.pi * j * tau_t[:, None]) @ wob
     rv += np.stack([np.interp(idx, grid, twist[:, a]) for a in range(3)], axis=1)
     if len(bursts):
-        k = len(bursts)  # back and forth about one wrist axis, so the turns do not add up
-        ax = rng.normal(size=3) * np.array([1.0, 0.5, 1.0]) + rng.normal(0.0, 0.2, (k, 3))
+        k = len(bursts)  # a wrist turn and back with each burst
+        ax = rng.normal(size=(k, 3)) * np.array([1.0, 0.5, 1.0])
         ax /= np.linalg.norm(ax, axis=1, keepdims=True)
         ang = rng.uniform(0.3, 0.6, k) * e_weight * (-1.0) ** np.arange(k)
-        steps = ndtr((tau_t[:, None] - bursts[:, 0]) / bursts[:, 1])
-        rv += (steps * ang) @ ax
+        rv += np.exp(-0.5 * ((tau_t[:, None] - bursts[:, 0]) / bursts[:, 1]) ** 2) * ang @ ax
 
     # Tremor and tracking noise.
     count = int(rng.integers(2, 4))
@@ -437,9 +437,9 @@ def dataset(people: int = 5, repeats: int = 2, seed: int = 0, patterns=PATTERNS,
     """Every pattern × every Drive × ``repeats`` takes (plus ``free`` free-style curves per
     Drive) for each of ``people`` sampled performers; deterministic for a ``seed``."""
     patterns = tuple(patterns)
-    for pat in patterns:
-        _check(pat, "Punch", rate)
-    if people < 0 or repeats < 0 or free < 0 or seed < 0:
+    for pat in patterns + (None,):
+        _check(pat, None, rate)
+    if min(people, repeats, free, seed) < 0:
         raise ValueError(f"people, repeats, free and seed must be ≥ 0, got {people}, {repeats}, {free}, {seed}")
     drives = list(DRIVES)
     out: list[Example] = []

@@ -1,9 +1,9 @@
 """Tests of the Laban-effort-labelled trajectory generator (laban.synth).
 
 The effort signatures are measured here, independently of ``laban.features``: each take is
-resampled uniformly at 90 Hz, differentiated with a Savitzky–Golay filter (9 samples, cubic)
-and compared with its counterpart that differs in one Element only (same person, pattern
-and the other two Elements).
+resampled uniformly at 90 Hz, differentiated with a Savitzky–Golay filter (cubic, 9 samples;
+15 for the size of the jerk peak, where tracking noise is loudest) and compared with its
+counterpart that differs in one Element only (same person, pattern and other two Elements).
 """
 
 from __future__ import annotations
@@ -36,20 +36,22 @@ def _kinematics(t: np.ndarray, p: np.ndarray, window: int = 9):
 def _measures(t: np.ndarray, p: np.ndarray) -> dict[str, float]:
     tu, pu, v, a, j = _kinematics(t, p)
     speed = np.linalg.norm(v, axis=1)
-    moving = np.flatnonzero(speed > 0.1 * speed.max())
-    i0, i1 = moving[0], moving[-1]
+    s = np.cumsum(speed) / speed.sum()  # fraction of the path length
     size = float(np.linalg.norm(np.ptp(pu, axis=0)))  # bounding-box diagonal
+    # The movement: from leaving the start to reaching the end (3 % of the size; tremor
+    # and noise are well under a millimetre).
+    i0 = np.argmax(np.linalg.norm(pu - pu[0], axis=1) > 0.03 * size)
+    i1 = len(pu) - 1 - np.argmax(np.linalg.norm(pu - pu[-1], axis=1)[::-1] > 0.03 * size)
     jerk = np.linalg.norm(j, axis=1)[i0:i1 + 1]
+    jerk15 = np.linalg.norm(_kinematics(t, p, window=15)[4], axis=1)[i0:i1 + 1]  # less noise
     cross = np.linalg.norm(np.cross(v, a), axis=1)
-    # Inner part of the path (10–90 % of its length): the envelope's ends left out.
-    s = np.cumsum(speed) / speed.sum()
-    inner = (s > 0.1) & (s < 0.9)
+    inner = (s > 0.1) & (s < 0.9)  # the envelope's ends left out
     va = np.cbrt(cross[inner])  # equi-affine speed in the osculating plane
     fast = speed > 0.2 * speed.max()
     curvature = cross[fast] / speed[fast] ** 2
     return {
         "duration": float(tu[i1] - tu[i0]),
-        "jerk": float(jerk.max() / size),
+        "jerk": float(jerk15.max() / size),
         "jerk_at": float(np.argmax(jerk) / (i1 - i0)),
         "size": size,
         "va_cv": float(va.std() / va.mean()),
@@ -121,8 +123,8 @@ def test_every_pattern_and_drive_well_formed(takes):
         assert np.all(e.p[:, 2] > 0.05) and np.all((e.p[:, 1] > 0.6) & (e.p[:, 1] < 1.8))
         assert 0.05 < np.linalg.norm(np.ptp(e.p, axis=0)) < 0.9
         # Upright and facing forward, give or take a wrist turn.
-        up = quat.rotate(e.q, np.array([0.0, 1.0, 0.0]))
-        assert np.all(up[:, 1] > 0.5), (e.pattern, e.drive)
+        up = quat.rotate(e.q, np.array([0.0, 1.0, 0.0]))[:, 1]
+        assert np.all(up > 0.3) and np.median(up) > 0.8, (e.pattern, e.drive)
 
 
 def test_still_pauses_before_and_after(takes):
@@ -206,7 +208,7 @@ def test_sudden_is_short_and_sustained_long(measured):
     sudden, sustained = _pairs(measured, "time", "duration")
     assert np.all(sudden < sustained)
     assert np.all(sudden < 1.2) and 0.2 < np.median(sudden) < 0.8
-    assert np.all(sustained > 1.2) and 1.8 < np.median(sustained) < 4.5
+    assert np.all(sustained > 1.0) and 1.6 < np.median(sustained) < 4.5
 
 
 def test_sudden_has_an_early_impulse(measured):
@@ -214,9 +216,8 @@ def test_sudden_has_an_early_impulse(measured):
     assert np.all(sudden > sustained)
     assert np.exp(np.mean(np.log(sudden / sustained))) > 5.0
     at_sudden, at_sustained = _pairs(measured, "time", "jerk_at")
-    assert np.mean(at_sudden) < 0.25
+    assert np.mean(at_sudden) < 0.3
     assert np.mean(at_sudden) < np.mean(at_sustained) - 0.15
-    assert np.mean(at_sudden < 0.25) > 0.8
 
 
 def test_strong_is_larger_than_light(measured):
@@ -228,30 +229,37 @@ def test_strong_is_larger_than_light(measured):
 def test_light_has_uniform_equi_affine_speed(measured):
     strong, light = _pairs(measured, "weight", "va_cv")
     assert np.mean(light < strong) > 0.85
-    assert np.exp(np.mean(np.log(strong / light))) > 1.3
+    assert np.exp(np.mean(np.log(strong / light))) > 1.5
 
 
 def test_indirect_meanders(measured):
     direct, indirect = _pairs(measured, "space", "curvature")
-    assert np.mean(indirect > direct) > 0.75
+    assert np.mean(indirect > direct) > 0.8
     assert np.exp(np.mean(np.log(indirect / direct))) > 1.3
 
 
 def test_light_follows_the_power_law():
-    """Noise-free Glide lemniscate: constant equi-affine speed, Euclidean speed varying with
-    curvature (the 1/3 power law); Press on the same path: equi-affine speed varies."""
-    who = _who(2, tremor=0.0, noise=0.0)
-    cv = {}
-    for drive in ("Glide", "Press"):
-        t, p, _ = synth.trajectory("lemniscate", drive, who, np.random.default_rng(0))
-        _, _, v, a, _ = _kinematics(t, p)
-        speed = np.linalg.norm(v, axis=1)
-        s = np.cumsum(speed) / speed.sum()
-        plateau = (s > 0.3) & (s < 0.7)
-        va = np.cbrt(np.linalg.norm(np.cross(v, a), axis=1))[plateau]
-        cv[drive] = va.std() / va.mean(), speed[plateau].std() / speed[plateau].mean()
-    assert cv["Glide"][0] < 0.1 < cv["Glide"][1]
-    assert cv["Press"][0] > 3 * cv["Glide"][0]
+    """Noise-free Glide on the hip sway (curvature varies, no inflections): constant
+    equi-affine speed while the Euclidean speed falls where the path bends (the 1/3 power
+    law, speed ∝ κ^(-1/3)); Press on the same path: equi-affine speed varies."""
+    found = {}
+    for seed in range(3):
+        who = _who(seed, tremor=0.0, noise=0.0)
+        for drive in ("Glide", "Press"):
+            t, p, _ = synth.trajectory("hip", drive, who, np.random.default_rng(seed))
+            _, pu, v, a, _ = _kinematics(t, p)
+            speed = np.linalg.norm(v, axis=1)
+            cross = np.linalg.norm(np.cross(v, a), axis=1)
+            s = np.cumsum(speed) / speed.sum()
+            plateau = (s > 0.25) & (s < 0.75)
+            va = np.cbrt(cross[plateau])
+            kappa = cross[plateau] / speed[plateau] ** 2
+            slope = np.polyfit(np.log(kappa), np.log(speed[plateau]), 1)[0]
+            found[seed, drive] = va.std() / va.mean(), speed[plateau].std() / speed[plateau].mean(), slope
+        glide, press = found[seed, "Glide"], found[seed, "Press"]
+        assert glide[0] < 0.12 < glide[1], glide
+        assert -0.6 < glide[2] < -0.2, glide
+        assert press[0] > 3 * glide[0], (glide, press)
 
 
 def test_orientation_twists_when_indirect_and_snaps_when_strong():

@@ -1,0 +1,185 @@
+"""HMM effort classifiers (thesis §4.4.2): one left-to-right Gaussian HMM with 6 states per
+class — per Drive (8) or per Element (6) — on feature sequences resampled to 512 points
+(:func:`laban.features.sequence`, the sets of Table 4.3); a curve goes to the class whose
+model gives it the highest likelihood (the forward algorithm, Fig. 4.21).
+
+Training (hmmlearn ``GaussianHMM``, diagonal covariances): the start is state 1, the
+transition matrix banded (stay or move one state right) and kept banded by EM; state means
+and variances start from a uniform split of each sequence in time (k-means would ignore time
+order). Features are standardised by the training frames' mean and deviation.
+
+Scoring is a scaled forward pass written with numpy over all models at once, so a model is
+plain arrays (persisted by :mod:`laban.models`) and needs no hmmlearn object to run.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+STATES = 6
+MIN_VARIANCE = 1e-3  # of standardised features: keeps a state that saw a constant from a zero variance
+
+
+@dataclass(frozen=True, eq=False)
+class HMMSet:
+    """Left-to-right Gaussian HMMs, one per label, sharing a feature standardisation."""
+
+    labels: tuple[str, ...]
+    start: np.ndarray  # (m, S)
+    transitions: np.ndarray  # (m, S, S)
+    means: np.ndarray  # (m, S, d)
+    variances: np.ndarray  # (m, S, d) diagonal
+    centre: np.ndarray  # (d,)
+    scale: np.ndarray  # (d,)
+
+    def log_likelihoods(self, seq: np.ndarray) -> np.ndarray:
+        """(m,) log P(sequence | model) for a (T, d) feature sequence, all models at once."""
+        x = (np.asarray(seq, dtype=float) - self.centre) / self.scale
+        m, S, d = self.means.shape
+        inv = (1.0 / self.variances).reshape(m * S, d)
+        mu = self.means.reshape(m * S, d)
+        const = np.sum(np.log(2 * np.pi * self.variances), axis=2).ravel() + np.sum(mu * mu * inv, axis=1)
+        quad = (x * x) @ inv.T - 2.0 * x @ (mu * inv).T  # Σ (x − μ)²/σ² expanded: two matrix products
+        log_b = (-0.5 * (quad + const)).reshape(len(x), m, S)
+        top = log_b.max(axis=2, keepdims=True)  # (T, m, 1): emissions scaled per frame, logs added back
+        b = np.exp(log_b - top)
+        total = top[:, :, 0].sum(axis=0)
+        return np.array([_forward(self.start[k], self.transitions[k], np.ascontiguousarray(b[:, k]),
+                                  np.ascontiguousarray(log_b[:, k]), total[k]) for k in range(len(self.labels))])
+
+
+def _forward(start: np.ndarray, A: np.ndarray, b: np.ndarray, log_b: np.ndarray, offset: float) -> float:
+    """log P(observations): the scaled forward algorithm on emission probabilities ``b``
+    (T, S) scaled per frame (their logs' frame maxima summing to ``offset``), or — when a
+    frame's scaled probabilities underflow to zero — the same pass in log space. Uses
+    hmmlearn's compiled passes (private in hmmlearn 0.3.3)."""
+    from hmmlearn._hmmc import forward_log, forward_scaling
+
+    try:
+        return offset + float(forward_scaling(start, A, b)[0])
+    except ValueError:  # underflow
+        with np.errstate(divide="ignore"):
+            return float(forward_log(start, A, log_b)[0])
+
+
+def left_to_right(points: int, states: int = STATES) -> tuple[np.ndarray, np.ndarray]:
+    """Start distribution and banded transitions whose expected stay fills ``points`` evenly."""
+    stay = 1.0 - states / max(points, states + 1)
+    A = np.zeros((states, states))
+    for s in range(states - 1):
+        A[s, s], A[s, s + 1] = stay, 1.0 - stay
+    A[-1, -1] = 1.0
+    start = np.zeros(states)
+    start[0] = 1.0
+    return start, A
+
+
+def fit(sequences: list[np.ndarray], states: int = STATES, iterations: int = 10, seed: int = 0):
+    """One left-to-right HMM on standardised sequences (each (T, d)); returns
+    ``(start, transitions, means, variances)``. Means and variances start from a uniform
+    split of every sequence in time; then Baum–Welch (:func:`baum_welch`)."""
+    del seed  # deterministic: no random initialisation
+    X = np.concatenate(sequences)
+    lengths = [len(s) for s in sequences]
+    split = np.concatenate([np.minimum((np.arange(n) * states) // n, states - 1) for n in lengths])
+    means = np.stack([X[split == s].mean(axis=0) for s in range(states)])
+    variances = np.stack([X[split == s].var(axis=0) + MIN_VARIANCE for s in range(states)])
+    start, A = left_to_right(int(np.mean(lengths)), states)
+    if len(set(lengths)) == 1:
+        return baum_welch(np.stack(sequences), start, A, means, variances, iterations)
+    return _hmmlearn_fit(X, lengths, start, A, means, variances, iterations)
+
+
+def _hmmlearn_fit(X, lengths, start, A, means, variances, iterations):
+    from hmmlearn.hmm import GaussianHMM
+
+    model = GaussianHMM(n_components=len(start), covariance_type="diag", n_iter=iterations, tol=1e-3,
+                        init_params="", params="stmc", min_covar=MIN_VARIANCE, covars_prior=0.0)
+    model.startprob_, model.transmat_, model.means_, model.covars_ = start, A, means, variances
+    model.fit(X, lengths)
+    return model.startprob_.copy(), model.transmat_.copy(), model.means_.copy(), model._covars_.copy()
+
+
+def baum_welch(X: np.ndarray, start, A, means, variances, iterations: int = 10, tol: float = 1e-3,
+               chunk: int = 512):
+    """EM for a diagonal Gaussian HMM on equal-length sequences ``X`` (N, T, d), every
+    sequence at once (scaled forward–backward, vectorised over sequences): the same
+    updates as hmmlearn's ``GaussianHMM.fit`` — which is the reference in the tests and
+    trains unequal lengths — without its per-sequence Python loop. Zero transitions stay
+    zero, so a left-to-right model stays one. Stops when the log-likelihood gains < tol."""
+    start, A, means, variances = (np.array(a, dtype=float) for a in (start, A, means, variances))
+    previous = -np.inf
+    for _ in range(iterations):
+        stats = [_estep(X[k:k + chunk], start, A, means, variances) for k in range(0, len(X), chunk)]
+        ll, g0, xi, g, gx, gxx = (sum(s[i] for s in stats) for i in range(6))
+        start = g0 / g0.sum()
+        A = np.where(A > 0, xi, 0.0)
+        A /= np.maximum(A.sum(axis=1, keepdims=True), 1e-300)
+        means = gx / np.maximum(g, 1e-300)[:, None]
+        variances = np.maximum(gxx / np.maximum(g, 1e-300)[:, None] - means**2, MIN_VARIANCE)
+        if ll - previous < tol:
+            break
+        previous = ll
+    return start, A, means, variances
+
+
+def _estep(X, start, A, means, variances):
+    """Sufficient statistics of a batch (n, T, d): total log-likelihood, first-state
+    occupancy, expected transitions, and state occupancy with first and second moments.
+
+    Emissions are scaled per frame (their maximum over states is 1, floored at 1e-300),
+    alpha is normalised per step (the scale factors give the likelihood), beta is
+    normalised by its own maximum per step and every posterior is normalised per step —
+    so nothing overflows, whatever the scales."""
+    n, T, d = X.shape
+    inv = 1.0 / variances
+    flat = np.ascontiguousarray(X.transpose(1, 0, 2)).reshape(T * n, d)  # time-major: each step contiguous
+    log_b = -0.5 * ((flat * flat) @ inv.T - 2.0 * flat @ (means * inv).T
+                    + np.sum(np.log(2 * np.pi * variances) + means**2 * inv, axis=1))
+    log_b = log_b.reshape(T, n, -1)
+    top = log_b.max(axis=2, keepdims=True)
+    b = np.maximum(np.exp(log_b - top), 1e-300)
+    alpha = np.empty_like(b)
+    log_c = 0.0
+    a = start * b[0]
+    for t in range(T):
+        if t:
+            a = (a @ A) * b[t]
+        c = a.sum(axis=1, keepdims=True)
+        log_c += float(np.log(c).sum())
+        a = a / c
+        alpha[t] = a
+    beta = np.empty_like(b)
+    beta[-1] = 1.0
+    xi = np.zeros_like(A)
+    for t in range(T - 2, -1, -1):
+        nb = b[t + 1] * beta[t + 1]
+        back = nb @ A.T
+        z = np.maximum(np.sum(alpha[t] * back, axis=1, keepdims=True), 1e-300)  # Σ over the pair posterior
+        xi += A * ((alpha[t] / z).T @ nb)
+        beta[t] = back / np.maximum(back.max(axis=1, keepdims=True), 1e-300)
+    gamma = alpha * beta
+    gamma /= np.maximum(gamma.sum(axis=2, keepdims=True), 1e-300)
+    g = gamma.sum(axis=(0, 1))
+    gf = gamma.reshape(T * n, -1)
+    ll = log_c + float(top.sum())
+    return ll, gamma[0].sum(axis=0), xi, g, gf.T @ flat, gf.T @ (flat * flat)
+
+
+def fit_set(labels: tuple[str, ...], sequences: list[np.ndarray], y: list[str], iterations: int = 10,
+            progress=None) -> HMMSet:
+    """One HMM per label on the sequences labelled with it, a shared standardisation."""
+    frames = np.concatenate(sequences)
+    centre, scale = frames.mean(axis=0), np.maximum(frames.std(axis=0), 1e-9)
+    parts = []
+    for k, label in enumerate(labels):
+        mine = [(s - centre) / scale for s, lab in zip(sequences, y) if lab == label]
+        if not mine:
+            raise ValueError(f"no training sequence for {label!r}")
+        parts.append(fit(mine, iterations=iterations, seed=k))
+        if progress:
+            progress(k + 1, len(labels))
+    start, A, means, variances = (np.stack(p) for p in zip(*parts))
+    return HMMSet(tuple(labels), start, A, means, variances, centre, scale)
