@@ -159,8 +159,14 @@ def cmd_compile(args) -> int:
         raise DoodleError(f"--threshold must be 0 or more, not {args.threshold:g}")
     if args.time or args.weight:
         qualities.setdefault((None, None), (args.time, args.weight))
+    effort_model = None
+    if not args.no_effort:
+        from laban.models import load as load_effort_model
+
+        effort_model = load_effort_model(args.effort_model)
     results = compile_doodle(doodle, args.library, not args.no_builtin, params, args.fps, args.scale, args.threshold,
-                             not args.no_foot_pinning, terrain, args.jump_arc, args.retime, qualities, args.style)
+                             not args.no_foot_pinning, terrain, args.jump_arc, args.retime, qualities, args.style,
+                             effort_model)
     out = Path(args.output)
     out.mkdir(parents=True, exist_ok=True)
     seconds = _seconds(doodle)
@@ -173,7 +179,7 @@ def cmd_compile(args) -> int:
             "bvh": str(bvh), "frames": r.motion.frames,
             "segments": [{"index": i, "action": s.action, "start": seconds(s.start), "end": seconds(s.end),
                           "exact": s.exact, "distance": s.distance, "clip": r.clips.get(s.action),
-                          "time": r.styles[i][0], "weight": r.styles[i][1],
+                          "time": r.styles[i][0], "weight": r.styles[i][1], "effort": _effort_entry(r.efforts[i]),
                           "tokens": [k.name for k in r.tokens[s.first:s.stop]]} for i, s in enumerate(r.segments)],
             "transitions": [round(b, 6) for b in r.transitions],
             "metrics": quality(r),
@@ -192,6 +198,15 @@ def cmd_compile(args) -> int:
               f"root deviation {m['root_deviation_m']} m, transition smoothness {m['transition_smoothness']}")
     print(f"{out / 'report.json'}" + (f"; preview: {', '.join(report['preview'])}" if args.preview else ""))
     return 0
+
+
+def _effort_entry(effort) -> dict | None:
+    """What the effort model said about a segment (None: given by the user, or not asked)."""
+    if effort is None:
+        return None
+    return {"time": effort.time, "weight": effort.weight, "p_sudden": round(effort.p_sudden, 3),
+            "p_strong": round(effort.p_strong, 3), "time_confidence": round(effort.time_confidence, 3),
+            "weight_confidence": round(effort.weight_confidence, 3), "drive": effort.drive, "state": effort.state}
 
 
 def cmd_stylize(args) -> int:
@@ -401,6 +416,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--time", type=float, default=0.0, help="Laban Time for every segment: sustained -1 … sudden 1")
     p.add_argument("--weight", type=float, default=0.0, help="Laban Weight for every segment: light -1 … strong 1")
     p.add_argument("--edits", metavar="FILE.json", help="per-segment time and weight (see README)")
+    p.add_argument("--effort-model", metavar="MODEL.npz",
+                   help="Laban Effort model for segments without a given quality (default: the shipped one)")
+    p.add_argument("--no-effort", action="store_true", help="do not recognise Time and Weight: neutral unless given")
     p.add_argument("--style", choices=["modifiers", "preferred"], default="modifiers",
                    help="Laban as the thesis's Time/Weight modifiers, or its study's preferred combination "
                         "(gesture retiming + motion scale + reshaping)")
@@ -441,6 +459,10 @@ def build_parser() -> argparse.ArgumentParser:
     q.add_argument("--include", default="*.bvh", metavar="GLOB", help="only files matching (default *.bvh)")
     q.add_argument("-o", "--output", metavar="OUT", help="library folder to write (default: ./NAME)")
     q.set_defaults(run=cmd_library)
+
+    from doodle import cli_laban
+
+    cli_laban.add_parser(sub)
 
     p = sub.add_parser("import", help="convert a CSV recording into a doodle file")
     p.add_argument("file", metavar="CSV")

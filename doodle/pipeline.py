@@ -57,18 +57,21 @@ class Animation:
     frame_ranges: list = None  # per segment, its first and last output frame
     projected: np.ndarray = None  # the doodle scaled and projected, before the transfer (n, 3)
     styles: list = None  # per segment, the (L_t, L_w) applied
+    efforts: list = None  # per segment, the recognised Effort (laban.classify.Quality) or None
 
 
 def compile_doodle(doodle: Doodle, library_dir=None, use_builtin: bool = True, params: SegmenterParams = SegmenterParams(),
                    fps: float = 30.0, scale: float | None = None, threshold: float = 2.0,
                    pin: bool = True, terrain=None, jump_arc: str = "clip", retime: str = "uniform",
-                   qualities: dict | None = None, style: str = "modifiers") -> list[Animation]:
+                   qualities: dict | None = None, style: str = "modifiers", effort_model=None) -> list[Animation]:
     """Every track of a doodle turned into an animation on one timeline.
 
     Feet are pinned in their contacts unless ``pin`` is False. ``qualities`` maps
     ``(track, segment index)`` — or ``(track, None)`` / ``(None, None)`` for every segment
     of a track / of the doodle — to Laban ``(L_t, L_w)``, applied to one-shot clips as the
     thesis's modifiers or, with ``style="preferred"``, as its study's preferred combination.
+    Segments without a quality given get the one ``effort_model`` (a
+    :class:`laban.models.EffortModel`) recognises in the hand's motion, if one is given.
     """
     from library.manifest import builtin as builtin_library
     from library.manifest import combine
@@ -93,13 +96,19 @@ def compile_doodle(doodle: Doodle, library_dir=None, use_builtin: bool = True, p
     for track in doodle.tracks:
         tokens, segments = recognised[track.name]
         spans, placed, used = [], [], {}
-        styles = []
+        styles, efforts = [], []
         for index, seg in enumerate(segments):
             on_skeleton = [c for c in clips.get(seg.action, []) if c.motion.skeleton.names == skeleton.names]
             clip = on_skeleton[0] if on_skeleton else rest
             name = seg.action if seg.action in library.names else "Idle"
             action = library.action(name) if name in library.names else library.action(rest.action)
-            lt, lw = _quality_of(qualities, track.name, index)
+            given = _quality_of(qualities, track.name, index)
+            effort = None
+            if given is None and effort_model is not None and seg.action != "unknown":
+                effort = effort_quality(effort_model, track, seg.start, seg.end)
+                given = (effort.time, effort.weight)
+            efforts.append(effort)
+            lt, lw = given or (0.0, 0.0)
             if action.cyclic:
                 lt = 0.0  # a cycle's pace is the hand's travel: Time has nothing to retime
             if (lt or lw) and on_skeleton:
@@ -145,7 +154,7 @@ def compile_doodle(doodle: Doodle, library_dir=None, use_builtin: bool = True, p
         projected = (track.p - track.p[0]) * scale
         projected[:, 1] = 0.0 if terrain is None else terrain.height(projected[:, [0, 2]])
         results.append(Animation(track.name, motion, segments, tokens, frame_path, transitions, used, rest.roles,
-                                terrain, ranges, projected, styles))
+                                terrain, ranges, projected, styles, efforts))
     return results
 
 
@@ -167,13 +176,20 @@ def gesture_timing(track, span) -> tuple[np.ndarray, np.ndarray] | None:
     return t, np.concatenate([[0.0], np.cumsum(steps)]) / total
 
 
-def _quality_of(qualities: dict | None, track: str, index: int) -> tuple[float, float]:
-    if not qualities:
-        return 0.0, 0.0
+def _quality_of(qualities: dict | None, track: str, index: int) -> tuple[float, float] | None:
+    """The user's (L_t, L_w) for a segment, or None where they gave none."""
     for key in ((track, index), (track, None), (None, None)):
-        if key in qualities:
+        if qualities and key in qualities:
             return qualities[key]
-    return 0.0, 0.0
+    return None
+
+
+def effort_quality(model, track, start: int, end: int):
+    """The Effort recognised in samples [start, end] of a track (laban, §4.4)."""
+    from laban.classify import quality as laban_quality
+
+    seg = slice(start, min(end + 1, len(track.t)))
+    return laban_quality(model, track.t[seg], track.p[seg], track.q[seg])
 
 
 def _stylized(clip, lt: float, lw: float, style: str = "modifiers", cycle: bool = False):

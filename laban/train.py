@@ -86,7 +86,7 @@ def train(curves: list[Labelled], held_out: list[Labelled] | None = None, sets=S
         y = np.array([DRIVES[c.drive][k] for c in curves])
         cols, _ = select(X, y, groups)
         bayes[factor] = fit_binary(X, y, cols)
-    step("features", 0, 1)
+    step("Naive Bayes", 1, 1)
     seqs, drives = _sequences(curves, sets, points, augment, seed, lambda i, n: step("sequences", i, n))
     drive_hmms = fit_set(tuple(DRIVES), seqs, drives, iterations, lambda i, n: step("drive HMMs", i, n))
     element_seqs, element_labels = [], []
@@ -160,3 +160,25 @@ def _confusion(truth, pred, labels) -> list[list[int]]:
     for a, b in zip(truth, pred):
         m[labels.index(a), labels.index(b)] += 1
     return m.tolist()
+
+
+# The shipped default model: generated performers, held-out performers for the temperature,
+# and others again for `doodle laban eval` (seeds differ, so no curve is shared).
+DEFAULT_DATA = {"train": dict(people=4, repeats=1, free=1, seed=1), "calibrate": dict(people=2, repeats=1, seed=2),
+                "test": dict(people=3, repeats=1, free=1, seed=3)}
+
+
+def generated(part: str = "train", **overrides) -> list[Labelled]:
+    """Labelled curves from :mod:`laban.synth` for one part of :data:`DEFAULT_DATA`."""
+    from laban import synth
+
+    spec = {**DEFAULT_DATA[part], **overrides}
+    return [Labelled(e.t, e.p, e.q, e.drive, f"{part}-{spec['seed']}-person{e.person}")
+            for e in synth.dataset(**spec)]
+
+
+def train_default(progress=None, **options) -> EffortModel:
+    """The shipped default model (``doodle laban train --synthetic``)."""
+    info = {"data": "laban.synth generated curves", "train": DEFAULT_DATA["train"],
+            "calibrate": DEFAULT_DATA["calibrate"]}
+    return train(generated("train"), generated("calibrate"), progress=progress, info=info, **options)
