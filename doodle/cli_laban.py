@@ -2,7 +2,7 @@
 own recordings for training.
 
 Labelled examples are doodle files whose header says which Drive was performed
-(``# x-drive: Punch``, optionally ``# x-performer: ana``); ``doodle laban label`` writes it.
+(``# x-drive Punch``, optionally ``# x-performer ana``); ``doodle laban label`` writes it.
 """
 
 from __future__ import annotations
@@ -33,6 +33,7 @@ def add_parser(sub) -> None:
     q.add_argument("--model", metavar="MODEL.npz", help="model to evaluate (default: the shipped one)")
     q.add_argument("-o", "--output", default=DEFAULT_EVAL_DIR, metavar="DIR", help=f"(default {DEFAULT_EVAL_DIR})")
     q.add_argument("--track", default="c0")
+    q.add_argument("--people", type=int, default=3, help="generated held-out performers (default 3)")
     q.add_argument("--json", action="store_true", help="print the report as JSON")
     q.set_defaults(run=cmd_eval)
 
@@ -95,7 +96,7 @@ def labelled(items, track: str = "c0") -> list:
         doodle = load(path)
         drive = doodle.meta.get("x-drive")
         if drive is None:
-            raise DoodleError(f"{path}: no '# x-drive:' header line — label it with `doodle laban label`")
+            raise DoodleError(f"{path}: no '# x-drive DRIVE' header line — label it with `doodle laban label`")
         if track not in doodle.names:
             raise DoodleError(f"{path}: no track {track!r} (tracks: {', '.join(doodle.names)})")
         tr = doodle.tracks[doodle.names.index(track)]
@@ -140,7 +141,9 @@ def cmd_eval(args) -> int:
     from laban.train import evaluate, generated
 
     model = _model(args.model)
-    curves = labelled(args.files, args.track) if args.files else generated("test")
+    if args.people < 1:
+        raise DoodleError(f"--people must be 1 or more, not {args.people}")
+    curves = labelled(args.files, args.track) if args.files else generated("test", people=args.people)
     report = evaluate(model, curves)
     report["data"] = [str(f) for f in args.files] or "generated held-out performers (laban.train.DEFAULT_DATA['test'])"
     out = Path(args.output)

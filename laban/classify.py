@@ -20,6 +20,8 @@ from laban.features import sequence
 from laban.models import EffortModel
 
 MIN_SAMPLES = 8  # a segment shorter than this is left neutral
+STILL_REACH = 0.03  # m: a hand that stayed within this box diagonal …
+STILL_TURN = 0.2  # rad: … and within this angle of its first orientation was still: neutral
 
 
 @dataclass(frozen=True)
@@ -56,6 +58,10 @@ def drive_posterior(model: EffortModel, t: np.ndarray, p: np.ndarray, q: np.ndar
 def quality(model: EffortModel, t: np.ndarray, p: np.ndarray, q: np.ndarray) -> Quality:
     """Time and Weight of the segment ``(t, p, q)``."""
     if len(t) < MIN_SAMPLES or float(t[-1] - t[0]) <= 0:
+        return NEUTRAL
+    reach = float(np.linalg.norm(np.ptp(p, axis=0)))
+    turn = float(2 * np.arccos(np.clip(np.abs(q @ q[0]), 0.0, 1.0)).max())
+    if reach < STILL_REACH and turn < STILL_TURN:
         return NEUTRAL
     post = drive_posterior(model, t, p, q)
     labels = model.drives.labels
