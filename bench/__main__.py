@@ -2,7 +2,7 @@
 
 import sys
 
-from bench import (bvh_speed, matcher_speed, real_gestures, segmenter_speed, stages_accuracy, stylize_speed,
+from bench import (bvh_speed, laban_effort, matcher_speed, real_gestures, segmenter_speed, stages_accuracy, stylize_speed,
                    terrain_speed)
 
 
@@ -21,6 +21,8 @@ def main() -> int:
     terrain_speed.main()
     print()
     stylize_speed.main()
+    print()
+    laban_effort.main()
     return 0
 
 
