@@ -26,6 +26,8 @@ def add_parser(sub) -> None:
     q.add_argument("-o", "--output", required=True, metavar="MODEL.npz")
     q.add_argument("--augment", type=int, default=16, help="sub-sampled copies per training curve (default 16)")
     q.add_argument("--track", default="c0", help="track of each file holding the gesture (default c0)")
+    q.add_argument("--sets", default="euclidean,affine,moving",
+                   help="HMM feature sets of Table 4.3, comma-separated (default: all three)")
     q.set_defaults(run=cmd_train)
 
     q = lsub.add_parser("eval", help="accuracy per factor, State and Drive; confusion matrices as PNG")
@@ -115,8 +117,13 @@ def cmd_train(args) -> int:
     from laban.models import save
     from laban.train import DEFAULT_DATA, generated, train
 
+    from laban.features import FEATURE_SETS
+
     if args.augment < 1:
         raise DoodleError(f"--augment must be 1 or more, not {args.augment}")
+    sets = tuple(s.strip() for s in args.sets.split(",") if s.strip())
+    if not sets or any(s not in FEATURE_SETS for s in sets):
+        raise DoodleError(f"--sets: choose among {', '.join(FEATURE_SETS)}, not {args.sets!r}")
     curves = labelled(args.files, args.track) if args.files else []
     held = []
     if args.synthetic:
@@ -126,7 +133,7 @@ def cmd_train(args) -> int:
         raise DoodleError("nothing to train on: give labelled doodle files or --synthetic")
     info = {"files": [str(f) for f in args.files], "synthetic": DEFAULT_DATA if args.synthetic else None}
     try:
-        model = train(curves, held or None, augment=args.augment, progress=_progress, info=info)
+        model = train(curves, held or None, sets=sets, augment=args.augment, progress=_progress, info=info)
     except ValueError as e:
         raise DoodleError(str(e)) from None
     save(model, args.output)

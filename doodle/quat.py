@@ -41,15 +41,12 @@ def multiply(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """Hamilton product ``a ⊗ b`` row by row (the rotation b, then a)."""
     ax, ay, az, aw = a[..., 0], a[..., 1], a[..., 2], a[..., 3]
     bx, by, bz, bw = b[..., 0], b[..., 1], b[..., 2], b[..., 3]
-    return np.stack(
-        [
-            aw * bx + ax * bw + ay * bz - az * by,
-            aw * by - ax * bz + ay * bw + az * bx,
-            aw * bz + ax * by - ay * bx + az * bw,
-            aw * bw - ax * bx - ay * by - az * bz,
-        ],
-        axis=-1,
-    )
+    out = np.empty(np.broadcast_shapes(a.shape, b.shape))
+    out[..., 0] = aw * bx + ax * bw + ay * bz - az * by
+    out[..., 1] = aw * by - ax * bz + ay * bw + az * bx
+    out[..., 2] = aw * bz + ax * by - ay * bx + az * bw
+    out[..., 3] = aw * bw - ax * bx - ay * by - az * bz
+    return out
 
 
 def conjugate(q: np.ndarray) -> np.ndarray:
@@ -63,10 +60,11 @@ def rotate(q: np.ndarray, u: np.ndarray) -> np.ndarray:
     tx = 2.0 * (y * uz - z * uy)
     ty = 2.0 * (z * ux - x * uz)
     tz = 2.0 * (x * uy - y * ux)
-    return np.stack(
-        [ux + w * tx + (y * tz - z * ty), uy + w * ty + (z * tx - x * tz), uz + w * tz + (x * ty - y * tx)],
-        axis=-1,
-    )
+    out = np.empty(np.broadcast_shapes(q.shape[:-1], u.shape[:-1]) + (3,))
+    out[..., 0] = ux + w * tx + (y * tz - z * ty)
+    out[..., 1] = uy + w * ty + (z * tx - x * tz)
+    out[..., 2] = uz + w * tz + (x * ty - y * tx)
+    return out
 
 
 def rotate_inverse(q: np.ndarray, u: np.ndarray) -> np.ndarray:

@@ -123,14 +123,16 @@ def smooth_edit(original: Motion, edited: Motion, bones: np.ndarray | None = Non
     return replace(edited, rotations=rots, translations=trans)
 
 
-def _restore_contacts(before: Motion, after: Motion) -> Motion:
+def _restore_contacts(before: Motion, after: Motion, world=None) -> Motion:
+    """``after`` with the feet that touched the ground in ``before`` back at their heights
+    (``world``: ``forward_kinematics(after)`` if the caller has it)."""
     roles = guess_roles(before.skeleton)
     feet = [roles[k] for k in ("left_foot", "right_foot") if k in roles]
     if not feet:
         return after
     old = forward_kinematics(before)[0]
     contact = foot_contacts(before, feet, world=old)
-    world = forward_kinematics(after)  # the legs are separate chains: one pass serves both
+    world = world or forward_kinematics(after)  # the legs are separate chains: one pass serves both
     for k, ankle in enumerate(feet):
         if not contact[:, k].any():
             continue
@@ -261,10 +263,10 @@ def _weight_poses(motion: Motion, stages: Stages, lw: float) -> Motion:
     return reshape(m, stages.anticipation, stages.execution, 0.1 * lw, "vertical")
 
 
-def _weight_times(motion: Motion, times: np.ndarray, lw: float) -> np.ndarray:
-    """Output time of each frame once Weight has retimed a motion whose frames already play
-    at ``times``: speed ∝ ``V_e^{α L_w}``, the duration kept (eq. 5.4–5.5)."""
-    world = forward_kinematics(motion)[0]
+def _weight_times(world: np.ndarray, times: np.ndarray, lw: float) -> np.ndarray:
+    """Output time of each frame once Weight has retimed a motion — joint positions
+    ``world`` (F, J, 3) — whose frames already play at ``times``: speed ∝ ``V_e^{α L_w}``,
+    the duration kept (eq. 5.4–5.5)."""
     dt = np.maximum(np.diff(times), 1e-9)
     speed = np.linalg.norm(np.diff(world, axis=0), axis=2).mean(axis=1) / dt
     v = np.concatenate([speed[:1], speed]) / max(speed.mean(), 1e-9)
@@ -307,9 +309,11 @@ def stylize_staged(motion: Motion, stages: Stages, lt: float = 0.0, lw: float = 
         times = _time_map(stages, motion.frame_time, lt)(t)
     if lw:
         m = _weight_poses(m, stages, lw)
-    m = _restore_contacts(motion, smooth_edit(motion, m))
-    if lw:
-        times = _weight_times(m, times, lw)
+    m = smooth_edit(motion, m)
+    world = forward_kinematics(m)
+    if lw:  # speeds read before the feet are put back: the contact IK barely moves anything
+        times = _weight_times(world[0], times, lw)
+    m = _restore_contacts(motion, m, world)
     times = _smooth_rate(times, motion.frame_time)
     out = retime(m, lambda _: times, oversample=_oversample(m))
     ends = np.array([stages.preparation, stages.anticipation, stages.execution, stages.follow_through])
