@@ -19,7 +19,7 @@ def confusion_png(matrix, labels: list[str], path, title: str) -> Path:
 
     m = np.asarray(matrix, dtype=float)
     share = m / np.maximum(m.sum(axis=1, keepdims=True), 1)
-    fig, ax = plt.subplots(figsize=(1.0 + 0.75 * len(labels), 0.8 + 0.7 * len(labels)))
+    fig, ax = plt.subplots(figsize=(max(5.0, 1.0 + 0.75 * len(labels)), max(4.5, 0.8 + 0.7 * len(labels))))
     ax.imshow(share, cmap="Blues", vmin=0, vmax=1)
     ax.set_xticks(range(len(labels)), labels, rotation=45, ha="right")
     ax.set_yticks(range(len(labels)), labels)
