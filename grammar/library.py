@@ -18,7 +18,8 @@ class Compiled:
 
     def automaton(self, threshold: float = 2.0, direction_costs: bool = False) -> Automaton:
         return Automaton(self.library.names, list(self.dfas), threshold, direction_costs,
-                         [a.cyclic for a in self.library.actions])
+                         [a.cyclic for a in self.library.actions],
+                         limits=[a.tolerance if a.tolerance is not None else threshold for a in self.library.actions])
 
     def dfa(self, name: str) -> DFA:
         return self.dfas[self.library.names.index(name)]

@@ -123,10 +123,13 @@ class Automaton:
     """The DFAs of a list of actions stacked for vectorised edit-distance steps."""
 
     def __init__(self, names: list[str], dfas: list[DFA], threshold: float = 2.0, direction_costs: bool = False,
-                 cyclic: list[bool] | None = None, protect_still: bool = True):
+                 cyclic: list[bool] | None = None, protect_still: bool = True, limits: list[float] | None = None):
         if not names:
             raise ValueError("no actions to match")
-        self.names, self.threshold = list(names), float(threshold)
+        # per action, the edit distance it may be matched within (learned actions carry
+        # their own tolerance); the automaton is built for the largest
+        self.limits = np.array(limits if limits is not None else [threshold] * len(names), dtype=float)
+        self.names, self.threshold = list(names), float(self.limits.max())
         self.cyclic = list(cyclic) if cyclic is not None else [False] * len(names)
         sizes = [d.size for d in dfas]
         offsets = np.concatenate([[0], np.cumsum(sizes)])
@@ -146,7 +149,7 @@ class Automaton:
         # place) then insert up to `threshold` tokens (follow edges without reading): the
         # two composed once here, per action block, as min-plus products.
         blocks, initial = [], []
-        for off, d in zip(offsets, dfas):
+        for off, d, limit in zip(offsets, dfas, self.limits):
             q = d.size
             reach = _insertion_closure(d, self.cap)  # (q, q) fewest insertions from p to r
             read = np.full((N_CODES, q, q), INF)
@@ -157,15 +160,15 @@ class Automaton:
             diag = np.arange(q)
             read[:, diag, diag] = np.minimum(read[:, diag, diag], delete[:, None])
             both = np.min(read[:, :, :, None] + reach[None, None, :, :], axis=2)  # (x, p, r)
-            blocks.append((off, both))
+            blocks.append((off, both, limit))
             initial.append(np.minimum(reach[0], self.cap))
         self.initial = np.concatenate(initial)
         self.step_src, self.step_off, self.step_cost = [], [], []
         states = np.arange(self.n)
         for x in range(N_CODES):
             src, dst, cost = [states], [states], [np.full(self.n, self.cap)]  # every state gets an entry
-            for off, both in blocks:
-                p, r = np.nonzero(both[x] <= self.threshold)
+            for off, both, limit in blocks:
+                p, r = np.nonzero(both[x] <= limit)
                 src.append(p + off)
                 dst.append(r + off)
                 cost.append(both[x][p, r])
@@ -225,15 +228,15 @@ class Matcher:
         cost, dist = self._best[e]
         best, back = (cost + self.unknown_cost, dist), (e, None, None)
         accept = auto.accept_costs(rows)
-        low = accept.min(axis=1)
         lengths = e + 1 - starts
-        eligible = (low == 0.0) | ((low <= auto.threshold) & (low < lengths / 2))
-        for k in np.flatnonzero(eligible).tolist():
+        ok = (accept == 0.0) | ((accept <= auto.limits) & (accept < lengths[:, None] / 2))
+        low = np.where(ok, accept, INF).min(axis=1)
+        for k in np.flatnonzero(ok.any(axis=1)).tolist():
             s, d_k = int(starts[k]), float(low[k])
             c, d = self._best[s]
             option = (c + 1.0 + self.edit_weight * d_k, d + d_k)
             if option < best:
-                action = auto.most_specific(np.flatnonzero(accept[k] == d_k), int(lengths[k]))
+                action = auto.most_specific(np.flatnonzero(ok[k] & (accept[k] == d_k)), int(lengths[k]))
                 best, back = option, (s, action, d_k)
         self._best[e + 1], self._back[e + 1] = best, back
         frontier = set(self._starts.tolist()) | {e + 1}

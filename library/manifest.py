@@ -49,7 +49,7 @@ from doodle.errors import DoodleError
 BUILTIN = Path(__file__).resolve().parent / "builtin"
 RESERVED = {"unknown"}
 FLAGS = ("cyclic", "in_place", "jumping")
-ACTION_KEYS = {"name", "expression", "note", "flags_note", "clips", "stages", "cycle_length", *FLAGS}
+ACTION_KEYS = {"name", "expression", "note", "flags_note", "clips", "stages", "cycle_length", "tolerance", *FLAGS}
 ROLES = ("pelvis", "chest", "head", "left_foot", "right_foot", "left_hand", "right_hand")
 
 
@@ -66,6 +66,7 @@ class ActionDef:
     stages: tuple[int, ...] | None = None  # frames ending the first four stages
     cycle_length: float | None = None  # metres per cycle
     roles: dict = field(default_factory=dict)  # its library's [skeleton] table: role -> joint name
+    tolerance: float | None = None  # edits a performance may be from the expression (None: the Matcher's)
 
 
 @dataclass(frozen=True)
@@ -182,6 +183,10 @@ def _action(entry, i: int, path: Path) -> ActionDef:
     cycle = entry.get("cycle_length")
     if cycle is not None and (not isinstance(cycle, (int, float)) or isinstance(cycle, bool) or not cycle > 0):
         raise DoodleError(f"{where}: field 'cycle_length' must be a positive number of metres")
+    tolerance = entry.get("tolerance")
+    if tolerance is not None and (not isinstance(tolerance, (int, float)) or isinstance(tolerance, bool)
+                                  or not 0 <= tolerance <= 20):
+        raise DoodleError(f"{where}: field 'tolerance' must be a number of edits from 0 to 20")
     flags = {}
     for flag in FLAGS:
         value = entry.get(flag, False)
@@ -190,7 +195,8 @@ def _action(entry, i: int, path: Path) -> ActionDef:
         flags[flag] = value
     return ActionDef(name, expression, note=str(entry.get("note", "")), source=str(path), clips=resolved,
                      stages=tuple(stages) if stages is not None else None,
-                     cycle_length=float(cycle) if cycle is not None else None, **flags)
+                     cycle_length=float(cycle) if cycle is not None else None,
+                     tolerance=float(tolerance) if tolerance is not None else None, **flags)
 
 
 def builtin() -> Library:
@@ -242,6 +248,8 @@ def format_library(library: Library, folder) -> str:
             lines.append(f"stages = [{', '.join(str(s) for s in a.stages)}]")
         if a.cycle_length is not None:
             lines.append(f"cycle_length = {a.cycle_length:.4f}")
+        if a.tolerance is not None:
+            lines.append(f"tolerance = {a.tolerance:g}")
         if a.note:
             lines.append(f"note = {_toml_string(a.note)}")
         lines.append("")

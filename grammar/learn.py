@@ -1,0 +1,267 @@
+"""Learning an action's expression from a few performed examples (thesis §4.2.5).
+
+1. **Average** the examples with DTW barycenter averaging (Petitjean, Ketterlin & Gançarski
+   2011, "A global averaging method for dynamic time warping", Pattern Recognition 44(3);
+   the thesis follows Ciccone et al. 2017): each example is put in its own starting frame
+   (positions relative to the first sample, in the first orientation's axes; orientations
+   relative to the first), resampled to :data:`POINTS` samples, and the average — started
+   from the medoid — is refined by aligning every example to it with DTW and taking the mean
+   of the points aligned to each of its samples (quaternions: the normalised mean of the
+   sign-aligned ones). It gets the examples' mean duration.
+2. **Tokenise** the n examples and the average (leading and trailing pauses dropped): n + 1
+   token strings.
+3. **Mandatory tokens**: a token that occurs in more than two of the strings (the thesis's
+   "repeated more than twice") is mandatory, any other optional.
+4. **Align** the strings' mandatory subsequences — each to the average's, by the
+   Levenshtein alignment (the thesis parses them "in parallel" position by position; an
+   alignment keeps a missing or extra token from shifting every later column) — into
+   columns ``r_k = (m_k0 | … | m_kn)``, written ``r_k+`` when every string has a token in the
+   column and ``r_k*`` otherwise (the thesis's rule for columns past the shortest string).
+5. **Optional tokens** between two columns go in a group before the later one,
+   ``((o…)|(o…)|…)*`` with one alternative per string that has any there — or, when every
+   string has the same non-empty run there, as that run itself (a "quick intentional"
+   gesture, mandatory).
+
+By construction every example's (and the average's) token string is accepted; the tests
+check it as a property. :func:`learn` returns the expression and the token strings it came
+from; :func:`collisions` tells which library actions accept some string it accepts.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from doodle import quat
+from doodle.errors import DoodleError
+from doodle.model import Track
+from doodle.segmenter import SegmenterParams, tokenize
+
+POINTS = 128  # samples per example for the DTW average
+ITERATIONS = 8
+LEVER = 0.1  # m: orientations weigh in DTW as rotation vectors times a hand's lever arm
+MIN_EXAMPLES = 2
+MIN_TOLERANCE = 2.0  # the Matcher's default: a learned action is never stricter
+MAX_TOLERANCE = 12.0
+
+
+@dataclass(frozen=True)
+class Learned:
+    expression: str
+    strings: tuple[tuple[str, ...], ...]  # the examples' token strings, then the average's
+    mandatory: frozenset
+    tolerance: float | None = None  # edits a new performance may be from the expression
+
+
+def canonical(t: np.ndarray, p: np.ndarray, q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """An example in its own starting frame: times from 0, positions from the first sample
+    in the first orientation's axes, orientations relative to the first."""
+    q = quat.make_continuous(quat.normalise(q))
+    q0 = np.broadcast_to(q[0], q.shape)
+    return (t - t[0], quat.rotate_inverse(q0, p - p[0]),
+            quat.make_continuous(quat.multiply(quat.conjugate(q0), q)))
+
+
+def _resample(t, x, n):
+    grid = np.linspace(t[0], t[-1], n)
+    return np.column_stack([np.interp(grid, t, c) for c in x.T])
+
+
+def _dtw_path(a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Indices (i, j) of the optimal DTW alignment of a (n, d) and b (m, d), squared l2 cost."""
+    n, m = len(a), len(b)
+    cost = ((a[:, None, :] - b[None, :, :]) ** 2).sum(axis=2)
+    D = np.full((n + 1, m + 1), np.inf)
+    D[0, 0] = 0.0
+    for i in range(1, n + 1):  # row by row
+        base = cost[i - 1] + np.minimum(D[i - 1, :-1], D[i - 1, 1:])  # from (i-1, j-1) or (i-1, j)
+        # from (i, j-1): row[j] = min over k ≤ j of base[k] + cost[i-1, k+1..j], a prefix minimum
+        c = np.cumsum(cost[i - 1])
+        D[i, 1:] = np.minimum.accumulate(base - c) + c
+    i, j = n, m
+    path = [(i - 1, j - 1)]
+    while i > 1 or j > 1:
+        steps = [(D[i - 1, j - 1], i - 1, j - 1), (D[i - 1, j], i - 1, j), (D[i, j - 1], i, j - 1)]
+        _, i, j = min(steps)
+        path.append((i - 1, j - 1))
+    ij = np.array(path[::-1])
+    return ij[:, 0], ij[:, 1]
+
+
+def dba(examples: list[tuple[np.ndarray, np.ndarray, np.ndarray]], points: int = POINTS,
+        iterations: int = ITERATIONS) -> Track:
+    """The DTW barycenter average of examples ``(t, p, q)`` as a track."""
+    feats, quats = [], []
+    for t, p, q in examples:
+        t, p, q = canonical(t, p, q)
+        qs = _resample(t, q, points)
+        quats.append(qs / np.linalg.norm(qs, axis=1, keepdims=True))
+        feats.append(np.column_stack([_resample(t, p, points), LEVER * quat.log(quats[-1])]))
+    dist = np.array([[_dtw_cost(a, b) for b in feats] for a in feats])
+    medoid = int(np.argmin(dist.sum(axis=1)))
+    avg, avg_q = feats[medoid].copy(), quats[medoid].copy()
+    for _ in range(iterations):
+        sums, qsum, counts = np.zeros_like(avg), np.zeros_like(avg_q), np.zeros(points)
+        for f, qq in zip(feats, quats):
+            i, j = _dtw_path(avg, f)
+            np.add.at(sums, i, f[j])
+            signs = np.where(np.sum(qq[j] * avg_q[i], axis=1) < 0, -1.0, 1.0)
+            np.add.at(qsum, i, qq[j] * signs[:, None])
+            np.add.at(counts, i, 1)
+        new = sums / counts[:, None]
+        avg_q = qsum / np.linalg.norm(qsum, axis=1, keepdims=True)
+        if np.allclose(new, avg, atol=1e-6):
+            avg = new
+            break
+        avg = new
+    duration = float(np.mean([t[-1] - t[0] for t, _, _ in examples]))
+    t = np.linspace(0.0, duration, points)
+    return Track("average", t, avg[:, :3], quat.make_continuous(avg_q), np.ones(points, dtype=bool))
+
+
+def _dtw_cost(a, b) -> float:
+    i, j = _dtw_path(a, b)
+    return float(((a[i] - b[j]) ** 2).sum())
+
+
+def token_string(track: Track, rate: float, params: SegmenterParams = SegmenterParams()) -> tuple[str, ...]:
+    """A track's compacted token names without leading and trailing pauses."""
+    names = [k.name for k in tokenize(track, rate, params)]
+    while names and names[0] == "T_STILL":
+        names.pop(0)
+    while names and names[-1] == "T_STILL":
+        names.pop()
+    return tuple(names)
+
+
+def _align(ref: list[str], seq: list[str]) -> list[tuple[int | None, int | None]]:
+    """Levenshtein alignment of seq to ref: pairs (ref index | None, seq index | None)."""
+    n, m = len(ref), len(seq)
+    D = np.zeros((n + 1, m + 1))
+    D[:, 0], D[0, :] = np.arange(n + 1), np.arange(m + 1)
+    for i in range(1, n + 1):
+        for j in range(1, m + 1):
+            D[i, j] = min(D[i - 1, j] + 1, D[i, j - 1] + 1, D[i - 1, j - 1] + (ref[i - 1] != seq[j - 1]))
+    pairs, i, j = [], n, m
+    while i or j:
+        if i and j and D[i, j] == D[i - 1, j - 1] + (ref[i - 1] != seq[j - 1]):
+            pairs.append((i - 1, j - 1))
+            i, j = i - 1, j - 1
+        elif i and D[i, j] == D[i - 1, j] + 1:
+            pairs.append((i - 1, None))
+            i -= 1
+        else:
+            pairs.append((None, j - 1))
+            j -= 1
+    return pairs[::-1]
+
+
+def expression_of(strings: list[tuple[str, ...]], reference: int = -1) -> Learned:
+    """The compact expression of §4.2.5 accepting every string; mandatory columns are
+    aligned to ``strings[reference]`` (the average's)."""
+    strings = [tuple(s) for s in strings]
+    if not any(strings):
+        raise DoodleError("every example is still: nothing to learn (move the controller while recording)")
+    present = {}
+    for s in strings:
+        for name in set(s):
+            present[name] = present.get(name, 0) + 1
+    mandatory = frozenset(n for n, c in present.items() if c > 2 or (len(strings) <= 2 and c == len(strings)))
+    ref_index = reference % len(strings)
+    ref_m = [x for x in strings[ref_index] if x in mandatory]
+    if not ref_m:  # the average lost them: the longest mandatory subsequence leads
+        ref_index = max(range(len(strings)), key=lambda k: sum(x in mandatory for x in strings[k]))
+        ref_m = [x for x in strings[ref_index] if x in mandatory]
+    columns = len(ref_m)
+    # per string: the token in each column (or None) and the optional runs in each gap
+    # (gap k comes before column k; gap `columns` after the last)
+    cells, gaps = [], []
+    for s in strings:
+        mand = [(k, x) for k, x in enumerate(s) if x in mandatory]
+        col = [None] * columns
+        gap = [[] for _ in range(columns + 1)]
+        where = {}  # position in s → column it was aligned to, or the gap before the next column
+        next_col = 0
+        for r, k in _align(ref_m, [x for _, x in mand]):
+            if r is not None:
+                next_col = r + 1
+            if k is None:
+                continue
+            pos = mand[k][0]
+            if r is not None and col[r] is None:
+                col[r] = s[pos]
+                where[pos] = ("col", r)
+            else:
+                where[pos] = ("gap", next_col if r is None else r + 1)
+        next_col = 0
+        for pos, x in enumerate(s):  # optional tokens (and unaligned mandatory ones) go in gaps
+            kind = where.get(pos)
+            if kind is not None and kind[0] == "col":
+                next_col = kind[1] + 1
+                continue
+            gap[kind[1] if kind else next_col].append(x)
+        cells.append(col)
+        gaps.append(gap)
+    parts = []
+    for k in range(columns + 1):
+        runs = sorted({tuple(g[k]) for g in gaps})
+        if len(runs) == 1 and runs[0]:
+            parts.append(" ".join(runs[0]))  # every string has this run: a quick intentional gesture
+        elif any(runs):
+            options = [" ".join(r) for r in runs if r]
+            parts.append("(" + " | ".join(f"({o})" if " " in o else o for o in options) + ")*")
+        if k < columns:
+            tokens = sorted({c[k] for c in cells if c[k] is not None})
+            body = tokens[0] if len(tokens) == 1 else "(" + " | ".join(tokens) + ")"
+            parts.append(body + ("+" if all(c[k] is not None for c in cells) else "*"))
+    return Learned(" ".join(parts), tuple(strings), mandatory)
+
+
+def learn(examples: list[tuple[np.ndarray, np.ndarray, np.ndarray]], rate: float,
+          params: SegmenterParams = SegmenterParams()) -> Learned:
+    """The expression of §4.2.5 for examples ``(t, p, q)`` of one track each."""
+    if len(examples) < MIN_EXAMPLES:
+        raise DoodleError(f"learning needs at least {MIN_EXAMPLES} examples, got {len(examples)}")
+    durations = [float(t[-1] - t[0]) for t, _, _ in examples]
+    if min(durations) <= 0 or max(durations) > 10 * min(durations):
+        raise DoodleError(f"examples last {', '.join(f'{d:.2f}' for d in durations)} s: one is more than 10× "
+                          "another — were they all the same gesture?")
+    strings = []
+    for k, (t, p, q) in enumerate(examples):
+        s = token_string(Track(f"example {k + 1}", t, p, q, np.ones(len(t), dtype=bool)), rate, params)
+        if not s:
+            raise DoodleError(f"example {k + 1} is all still: nothing was performed")
+        strings.append(s)
+    average = token_string(dba(examples), rate, params)
+    learned = expression_of(strings + ([average] if average else []))
+    return replace(learned, tolerance=tolerance(learned.strings, len(strings)))
+
+
+def distances(expressions: list[str], string: tuple[str, ...], cap: float = 40.0) -> np.ndarray:
+    """Edit distance (insert, delete, substitute: 1 each) from a token string to each
+    expression's language, capped at ``cap``."""
+    from doodle.tokens import CODES
+    from grammar.automata import compile_expression
+    from grammar.expr import parse
+    from grammar.matcher import Automaton
+
+    auto = Automaton([str(k) for k in range(len(expressions))],
+                     [compile_expression(parse(e)) for e in expressions], threshold=cap, protect_still=False)
+    d = auto.initial.copy()
+    for name in string:
+        d = auto.step(d, CODES[name])
+    return auto.accept_costs(d)
+
+
+def tolerance(strings: tuple[tuple[str, ...], ...], examples: int) -> float:
+    """How far a new performance may be from the expression: each example's distance to the
+    expression learned without it (leave one out), the largest, and one edit more — at
+    least the Matcher's default, at most :data:`MAX_TOLERANCE`."""
+    worst = 0.0
+    for k in range(examples):
+        rest = [s for j, s in enumerate(strings) if j != k]
+        if not any(rest):
+            continue
+        worst = max(worst, float(distances([expression_of(rest).expression], strings[k], MAX_TOLERANCE)[0]))
+    return float(np.clip(worst + 1.0, MIN_TOLERANCE, MAX_TOLERANCE))

@@ -1,0 +1,153 @@
+"""Learning actions from examples (§4.2.5): DTW averaging, the compact expression (accepts
+every example — a property), tolerances, `doodle learn` on real Vive recordings, and bad input."""
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from doodle.cli import main
+from doodle.errors import DoodleError
+from doodle.synth import stroke, synth_doodle
+from doodle.tokens import NAMES
+from grammar.learn import _dtw_path, dba, distances, expression_of, learn
+
+VIVE = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "vive-gestures"
+MOVES = [n for n in NAMES if n != "T_STILL"]
+
+
+def compacted(draw_list):
+    out = []
+    for x in draw_list:
+        if not out or out[-1] != x:
+            out.append(x)
+    return tuple(out)
+
+
+token_strings = st.lists(st.sampled_from(MOVES[:12]), min_size=1, max_size=12).map(compacted)
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.lists(token_strings, min_size=2, max_size=5))
+def test_every_example_is_accepted(strings):
+    learned = expression_of(strings)
+    assert np.all(distances([learned.expression], s)[0] == 0 for s in strings), learned.expression
+    for s in strings:
+        assert distances([learned.expression], s)[0] == 0, (s, learned.expression)
+
+
+def test_mandatory_tokens_and_quick_gestures():
+    strings = [("T_Y", "T_Z", "R_X", "T_N_Y"), ("T_Y", "T_Z", "T_N_Y"), ("T_Y", "T_X", "T_Z", "T_N_Y"),
+               ("T_Y", "T_Z", "T_N_Y")]
+    learned = expression_of(strings)
+    assert learned.mandatory == {"T_Y", "T_Z", "T_N_Y"}
+    assert learned.expression == "T_Y+ (T_X)* T_Z+ (R_X)* T_N_Y+"
+    same = expression_of([("T_Y", "R_X", "T_Z")] * 3)  # the same run everywhere: mandatory as it is
+    assert same.expression == "T_Y+ R_X+ T_Z+"
+    assert distances([learned.expression], ("T_Y", "T_Z", "T_X", "T_N_Y"))[0] == 1.0
+
+
+def test_dtw_path_is_optimal():
+    rng = np.random.default_rng(0)
+    a, b = rng.normal(size=(15, 2)), rng.normal(size=(22, 2))
+    n, m = len(a), len(b)
+    c = ((a[:, None] - b[None]) ** 2).sum(2)
+    D = np.full((n + 1, m + 1), np.inf)
+    D[0, 0] = 0
+    for i in range(1, n + 1):
+        for j in range(1, m + 1):
+            D[i, j] = c[i - 1, j - 1] + min(D[i - 1, j - 1], D[i - 1, j], D[i, j - 1])
+    i, j = _dtw_path(a, b)
+    assert ((a[i] - b[j]) ** 2).sum() == pytest.approx(D[n, m])
+    assert i[0] == j[0] == 0 and i[-1] == n - 1 and j[-1] == m - 1
+
+
+def test_average_of_time_warped_copies_keeps_the_shape():
+    d = synth_doodle({"c0": [stroke("T_STILL", 0.3), stroke("T_Z", 0.8), stroke("T_Y", 0.6), stroke("T_STILL", 0.3)]},
+                     rate=90, seed=3, noise=0.0, tremor=0.0, drift=0.0)
+    tr = d.track("c0")
+    warped = []
+    for k, power in enumerate((1.0, 0.8, 1.25)):
+        u = (np.linspace(0, 1, len(tr.t)) ** power) * tr.t[-1]
+        warped.append((tr.t, np.column_stack([np.interp(u, tr.t, tr.p[:, c]) for c in range(3)]), tr.q))
+    avg = dba(warped)
+    assert np.ptp(avg.p[:, 2]) == pytest.approx(np.ptp(tr.p[:, 2]), rel=0.05)
+    assert np.ptp(avg.p[:, 1]) == pytest.approx(np.ptp(tr.p[:, 1]), rel=0.05)
+
+
+def _synthetic(seed):
+    d = synth_doodle({"c0": [stroke("T_STILL", 0.4), stroke("T_Z", 0.5), stroke("T_Y", 0.4), stroke("T_N_Z", 0.5),
+                             stroke("T_STILL", 0.4)]}, rate=90, seed=seed)
+    tr = d.track("c0")
+    return tr.t, tr.p, tr.q
+
+
+def test_learn_from_synthetic_examples_and_bad_input():
+    examples = [_synthetic(s) for s in (1, 2, 3)]
+    learned = learn(examples, 90.0)
+    for s in learned.strings:
+        assert distances([learned.expression], s)[0] == 0
+    assert {"T_Z", "T_Y", "T_N_Z"} <= learned.mandatory
+    assert 2.0 <= learned.tolerance <= 12.0
+    t, p, q = examples[0]
+    long = (np.concatenate([t, t[-1] + 0.01 + np.arange(11 * len(t)) / 90.0]),
+            np.concatenate([p, np.repeat(p[-1:], 11 * len(t), 0)]), np.concatenate([q, np.repeat(q[-1:], 11 * len(t), 0)]))
+    with pytest.raises(DoodleError, match="more than 10×"):
+        learn([long, examples[1], examples[2]], 90.0)
+    still = (t, np.repeat(p[:1], len(t), 0), np.repeat(q[:1], len(t), 0))
+    with pytest.raises(DoodleError, match="example 2 is all still"):
+        learn([examples[0], still, examples[2]], 90.0)
+    with pytest.raises(DoodleError, match="at least 2 examples"):
+        learn(examples[:1], 90.0)
+
+
+def _vive(gesture, user="Sub_U001"):
+    files = [VIVE / user / gesture / f"ex_{k}_moderate.csv" for k in range(5)]
+    if not all(f.exists() for f in files):
+        pytest.skip("real Vive recordings not found")
+    return [str(f) for f in files]
+
+
+def test_doodle_learn_then_recognize_a_held_out_performance(tmp_path, capsys):
+    files = _vive("hook_left")
+    lib = tmp_path / "mine"
+    assert main(["learn", "Hook", *files[:3], "--library", str(lib), "--convention", "unity"]) == 0
+    out = capsys.readouterr().out
+    assert "Hook (c0" in out and "average" in out and (lib / "library.toml").exists()
+    assert main(["recognize", "--library", str(lib), "--no-builtin", "--convention", "unity", "--json",
+                 "--tracks", "c0", files[4]]) == 0
+    import json
+
+    segs = json.loads(capsys.readouterr().out)["segments"]
+    hook = [s for s in segs if s["action"] == "Hook"]
+    assert hook and sum(s["end"] - s["start"] for s in hook) > 0.6 * (segs[-1]["end"] - segs[0]["start"])
+    assert main(["learn", "Hook", *files[:3], "--library", str(lib), "--convention", "unity"]) == 1
+    assert "'Hook' exists already" in capsys.readouterr().err
+    assert main(["learn", "Hook", *files[:3], "--library", str(lib), "--convention", "unity", "--replace"]) == 0
+    capsys.readouterr()
+
+
+def test_two_tracks_learn_an_expression_pair(tmp_path, capsys):
+    from library.manifest import load_library
+
+    files = _vive("golf_swing")
+    lib = tmp_path / "pair"
+    assert main(["learn", "Golf", *files[:3], "--library", str(lib), "--convention", "unity",
+                 "--tracks", "c0,c1"]) == 0
+    library = load_library(lib)
+    assert library.names == ["Golf.c0", "Golf.c1"]
+    assert library.interactions[0].name == "Golf" and library.interactions[0].actions == ("Golf.c0", "Golf.c1")
+    assert all(a.tolerance >= 2 for a in library.actions)
+    out = capsys.readouterr().out
+    assert "overlap" in out
+
+
+def test_learn_command_bad_input(tmp_path, capsys):
+    assert main(["learn", "X", "--library", str(tmp_path / "l"), "--record"]) == 1
+    assert "SteamVR" in capsys.readouterr().err
+    assert main(["learn", "X", str(tmp_path / "missing.doodle"), str(tmp_path / "m2.doodle"),
+                 "--library", str(tmp_path / "l")]) == 1
+    assert "missing.doodle" in capsys.readouterr().err
+    assert not (tmp_path / "l" / "library.toml").exists()
