@@ -2,7 +2,7 @@
 
 import sys
 
-from bench import (bvh_speed, laban_effort, matcher_speed, real_gestures, segmenter_speed, stages_accuracy, stylize_speed,
+from bench import (bvh_speed, laban_effort, learning, matcher_speed, real_gestures, segmenter_speed, stages_accuracy, stylize_speed,
                    terrain_speed)
 
 
@@ -23,6 +23,8 @@ def main() -> int:
     stylize_speed.main()
     print()
     laban_effort.main()
+    print()
+    learning.main()
     return 0
 
 

@@ -98,7 +98,10 @@ def dba(examples: list[tuple[np.ndarray, np.ndarray, np.ndarray]], points: int =
         qs = _resample(t, q, points)
         quats.append(qs / np.linalg.norm(qs, axis=1, keepdims=True))
         feats.append(np.column_stack([_resample(t, p, points), LEVER * quat.log(quats[-1])]))
-    dist = np.array([[_dtw_cost(a, b) for b in feats] for a in feats])
+    dist = np.zeros((len(feats), len(feats)))
+    for i in range(len(feats)):
+        for j in range(i + 1, len(feats)):
+            dist[i, j] = dist[j, i] = _dtw_cost(feats[i], feats[j])
     medoid = int(np.argmin(dist.sum(axis=1)))
     avg, avg_q = feats[medoid].copy(), quats[medoid].copy()
     for _ in range(iterations):
@@ -219,8 +222,9 @@ def expression_of(strings: list[tuple[str, ...]], reference: int = -1) -> Learne
 
 
 def learn(examples: list[tuple[np.ndarray, np.ndarray, np.ndarray]], rate: float,
-          params: SegmenterParams = SegmenterParams()) -> Learned:
-    """The expression of §4.2.5 for examples ``(t, p, q)`` of one track each."""
+          params: SegmenterParams = SegmenterParams(), with_tolerance: bool = True) -> Learned:
+    """The expression of §4.2.5 for examples ``(t, p, q)`` of one track each (and its
+    :func:`tolerance`, unless ``with_tolerance`` is False)."""
     if len(examples) < MIN_EXAMPLES:
         raise DoodleError(f"learning needs at least {MIN_EXAMPLES} examples, got {len(examples)}")
     durations = [float(t[-1] - t[0]) for t, _, _ in examples]
@@ -235,19 +239,27 @@ def learn(examples: list[tuple[np.ndarray, np.ndarray, np.ndarray]], rate: float
         strings.append(s)
     average = token_string(dba(examples), rate, params)
     learned = expression_of(strings + ([average] if average else []))
-    return replace(learned, tolerance=tolerance(learned.strings, len(strings)))
+    return replace(learned, tolerance=tolerance(learned.strings, len(strings))) if with_tolerance else learned
 
 
 def distances(expressions: list[str], string: tuple[str, ...], cap: float = 40.0) -> np.ndarray:
     """Edit distance (insert, delete, substitute: 1 each) from a token string to each
     expression's language, capped at ``cap``."""
-    from doodle.tokens import CODES
+    return _run(_automaton(expressions, cap), string)
+
+
+def _automaton(expressions: list[str], cap: float):
     from grammar.automata import compile_expression
     from grammar.expr import parse
     from grammar.matcher import Automaton
 
-    auto = Automaton([str(k) for k in range(len(expressions))],
+    return Automaton([str(k) for k in range(len(expressions))],
                      [compile_expression(parse(e)) for e in expressions], threshold=cap, protect_still=False)
+
+
+def _run(auto, string: tuple[str, ...]) -> np.ndarray:
+    from doodle.tokens import CODES
+
     d = auto.initial.copy()
     for name in string:
         d = auto.step(d, CODES[name])
@@ -258,10 +270,10 @@ def tolerance(strings: tuple[tuple[str, ...], ...], examples: int) -> float:
     """How far a new performance may be from the expression: each example's distance to the
     expression learned without it (leave one out), the largest, and one edit more — at
     least the Matcher's default, at most :data:`MAX_TOLERANCE`."""
-    worst = 0.0
-    for k in range(examples):
-        rest = [s for j, s in enumerate(strings) if j != k]
-        if not any(rest):
-            continue
-        worst = max(worst, float(distances([expression_of(rest).expression], strings[k], MAX_TOLERANCE)[0]))
+    held = [k for k in range(examples) if any(s for j, s in enumerate(strings) if j != k)]
+    if not held:
+        return MIN_TOLERANCE
+    loo = [expression_of([s for j, s in enumerate(strings) if j != k]).expression for k in held]
+    auto = _automaton(loo, MAX_TOLERANCE)  # one automaton, one block per left-out example
+    worst = max(float(_run(auto, strings[k])[i]) for i, k in enumerate(held))
     return float(np.clip(worst + 1.0, MIN_TOLERANCE, MAX_TOLERANCE))

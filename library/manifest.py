@@ -17,6 +17,7 @@ A library is a folder holding ``library.toml``::
     stages = [4, 9, 20, 26]          # optional: frames ending preparation, anticipation,
                                      #   execution and follow-through (else extracted)
     cycle_length = 1.3               # optional, cyclic clips: metres travelled per cycle
+    tolerance = 6                    # optional: token edits a performance may differ by (default: the Matcher's 2)
 
     [skeleton]                       # optional: joints playing each role in the clips
     pelvis = "Hips"
