@@ -151,3 +151,29 @@ def test_learn_command_bad_input(tmp_path, capsys):
                  "--library", str(tmp_path / "l")]) == 1
     assert "missing.doodle" in capsys.readouterr().err
     assert not (tmp_path / "l" / "library.toml").exists()
+
+
+def test_tolerance_field_and_per_action_limits(tmp_path):
+    from grammar.library import compile_library
+    from grammar.matcher import match
+    from doodle.tokens import Token
+    from library.manifest import format_library, load_library
+
+    folder = tmp_path / "lib"
+    folder.mkdir()
+    (folder / "library.toml").write_text('[library]\nname = "t"\nformat = 1\n\n[[actions]]\nname = "Zig"\n'
+                                         'expression = "T_X T_Y T_N_X T_Y T_X T_Y T_N_X T_Y"\ntolerance = 3\n')
+    lib = load_library(folder)
+    assert lib.action("Zig").tolerance == 3.0
+    assert "tolerance = 3" in format_library(lib, folder)
+    three_off = ["T_X", "T_Z", "T_N_X", "T_N_Z", "T_X", "R_Y", "T_N_X", "T_Y"]  # three substitutions
+    tokens = [Token(n, k, k + 1) for k, n in enumerate(three_off)]
+    assert [s.action for s in match(tokens, compile_library(lib).automaton())] == ["Zig"]
+    strict = load_library(folder)
+    strict = type(strict)(strict.name, (type(strict.actions[0])(**{**strict.actions[0].__dict__, "tolerance": None}),),
+                          strict.source)
+    assert [s.action for s in match(tokens, compile_library(strict).automaton())] == ["unknown"]
+    (folder / "library.toml").write_text('[library]\nname = "t"\nformat = 1\n\n[[actions]]\nname = "Zig"\n'
+                                         'expression = "T_X"\ntolerance = -1\n')
+    with pytest.raises(DoodleError, match="action 'Zig': field 'tolerance' must be a number of edits"):
+        load_library(folder)
