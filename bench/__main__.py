@@ -2,7 +2,7 @@
 
 import sys
 
-from bench import (bvh_speed, laban_effort, learning, matcher_speed, real_gestures, segmenter_speed, stages_accuracy, stylize_speed,
+from bench import (bvh_speed, laban_effort, learning, matcher_speed, replay_latency, real_gestures, segmenter_speed, stages_accuracy, stylize_speed,
                    terrain_speed)
 
 
@@ -25,6 +25,8 @@ def main() -> int:
     laban_effort.main()
     print()
     learning.main()
+    print()
+    replay_latency.main()
     return 0
 
 

@@ -1,0 +1,47 @@
+"""``doodle replay FILE [--speed X]``: a recorded doodle streamed as if live (see doodle.replay)."""
+
+from __future__ import annotations
+
+import sys
+
+from doodle.errors import DoodleError
+
+
+def add_parser(sub, input_options, segmenter_options) -> None:
+    p = sub.add_parser("replay", help="stream a recorded doodle through the live recogniser, printing actions")
+    p.add_argument("file")
+    p.add_argument("--speed", type=float, default=1.0, help="1 real time (default), 2 twice as fast, 0 flat out")
+    p.add_argument("--library", metavar="DIR", help="a user library (folder with library.toml)")
+    p.add_argument("--no-builtin", action="store_true", help="use only the library given with --library")
+    p.add_argument("--threshold", type=float, default=2.0, help="edits allowed for approximate matches (default 2)")
+    input_options(p)
+    segmenter_options(p)
+    p.set_defaults(run=cmd_replay)
+
+
+def cmd_replay(args) -> int:
+    import numpy as np
+
+    from doodle.cli import _load, _params
+    from doodle.pipeline import load_actions
+    from doodle.replay import replay
+
+    if not (args.speed >= 0 and np.isfinite(args.speed)):
+        raise DoodleError(f"--speed must be 0 (flat out) or a positive number, not {args.speed:g}")
+    params, mounts = _params(args)
+    doodle = _load(args.file, args, mounts)
+    automaton = load_actions(args.library, not args.no_builtin).automaton(args.threshold)
+    pace = "flat out" if not args.speed else f"{args.speed:g}× real time"
+    print(f"{args.file}: {len(doodle.tracks)} track(s), {doodle.t[-1]:.2f} s, replayed {pace}", flush=True)
+
+    def show(r):
+        how = "exact" if r.exact else f"distance {r.distance:g}"
+        print(f"  {r.at:8.2f} s  {r.track}  {r.action:<16} {r.start:7.2f}–{r.end:7.2f} s  {how:<12} "
+              f"latency {r.latency:.2f} s", flush=True)
+
+    found, costs = replay(doodle, automaton, params, args.speed or None, show)
+    lat = [r.latency for r in found]
+    print(f"{len(found)} action(s); latency after a gesture ends: median {np.median(lat) if lat else 0:.2f} s; "
+          f"processing per frame: p50 {np.percentile(costs, 50) * 1e3:.3f} ms, p99 {np.percentile(costs, 99) * 1e3:.3f} ms",
+          file=sys.stdout)
+    return 0

@@ -1,0 +1,76 @@
+"""Replaying a recorded doodle as if it were live: every sample of every track through the
+streaming Segmenter and Matcher, in time order, at real speed, faster, or as fast as it
+goes — each action reported when the stream recognises it, with how long after the
+gesture's end that was (the recognition latency a performer would feel).
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from doodle.model import Doodle
+from doodle.segmenter import Segmenter, SegmenterParams
+
+
+@dataclass(frozen=True)
+class Recognised:
+    track: str
+    action: str
+    start: float  # s, the segment's first sample
+    end: float  # s, its last sample
+    at: float  # s of stream time when the stream had recognised it
+    exact: bool
+    distance: float | None
+
+    @property
+    def latency(self) -> float:
+        return self.at - self.end
+
+
+def replay(doodle: Doodle, automaton, params: SegmenterParams = SegmenterParams(), speed: float | None = None,
+           on_action=None, clock=time.perf_counter, sleep=time.sleep) -> tuple[list[Recognised], np.ndarray]:
+    """Stream ``doodle``; returns what was recognised and the processing time of every
+    frame (all tracks' samples at one time step), in seconds. ``speed`` 1 is real time, 2
+    twice as fast, None as fast as possible; ``on_action(Recognised)`` is called as each
+    action is recognised."""
+    from grammar.matcher import Matcher
+
+    tracks = doodle.tracks
+    segmenters = [Segmenter(doodle.rate, params, tr.name, doodle.source) for tr in tracks]
+    matchers = [Matcher(automaton, tr.name) for tr in tracks]
+    found: list[Recognised] = []
+    times = tracks[0].t
+    costs = np.empty(len(times))
+    start_wall = clock()
+
+    def report(k, segments, now):
+        t = tracks[k].t
+        for s in segments:
+            if s.action == "unknown":
+                continue
+            r = Recognised(tracks[k].name, s.action, float(t[min(s.start, len(t) - 1)]),
+                           float(t[min(max(s.end - 1, s.start), len(t) - 1)]), float(now), s.exact, s.distance)
+            found.append(r)
+            if on_action:
+                on_action(r)
+
+    for i, now in enumerate(times):
+        if speed:
+            wait = start_wall + now / speed - clock()
+            if wait > 0:
+                sleep(wait)
+        tick = time.perf_counter()
+        for k, tr in enumerate(tracks):
+            for token in segmenters[k].push(now, tr.p[i], tr.q[i], bool(tr.valid[i])):
+                report(k, matchers[k].push(token), now)
+        costs[i] = time.perf_counter() - tick
+    end = float(times[-1])
+    for k in range(len(tracks)):
+        segments = []
+        for token in segmenters[k].close():
+            segments += matchers[k].push(token)
+        report(k, segments + matchers[k].close(), end)
+    return found, costs
