@@ -2,8 +2,8 @@
 
 import sys
 
-from bench import (bvh_speed, laban_effort, learning, matcher_speed, replay_latency, real_gestures, segmenter_speed, stages_accuracy, stylize_speed,
-                   terrain_speed)
+from bench import (bvh_speed, laban_effort, learning, matcher_speed, real_gestures, replay_latency, segmenter_speed,
+                   stages_accuracy, stylize_speed, terrain_speed)
 
 
 def main() -> int:
