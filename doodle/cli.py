@@ -460,8 +460,9 @@ def build_parser() -> argparse.ArgumentParser:
     q.add_argument("-o", "--output", metavar="OUT", help="library folder to write (default: ./NAME)")
     q.set_defaults(run=cmd_library)
 
-    from doodle import cli_laban, cli_learn, cli_replay
+    from doodle import cli_laban, cli_learn, cli_record, cli_replay
 
+    cli_record.add_record_parser(sub)
     cli_laban.add_parser(sub)
     cli_learn.add_parser(sub, _input_options, _segmenter_options)
     cli_replay.add_parser(sub, _input_options, _segmenter_options)
