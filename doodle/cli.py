@@ -187,8 +187,13 @@ def cmd_compile(args) -> int:
     if args.preview:
         from retarget.preview import keyframes, plan_view
 
+        from doodle.cli_render import preview_sheet
+
         report["preview"] = [str(plan_view(results, {r.track: r.projected for r in results}, out / "plan.png")),
                              str(keyframes(results, out / "keyframes.png"))]
+        sheet = preview_sheet(results, terrain, out / "render.png", args.fps)
+        if sheet is not None:
+            report["preview"].append(str(sheet))
     atomic_write(out / "report.json", [json.dumps(report, indent=2) + "\n"])
     for name, tr in report["tracks"].items():
         m = tr["metrics"]
@@ -460,9 +465,10 @@ def build_parser() -> argparse.ArgumentParser:
     q.add_argument("-o", "--output", metavar="OUT", help="library folder to write (default: ./NAME)")
     q.set_defaults(run=cmd_library)
 
-    from doodle import cli_laban, cli_learn, cli_record, cli_replay
+    from doodle import cli_laban, cli_learn, cli_record, cli_render, cli_replay
 
     cli_record.add_record_parser(sub)
+    cli_render.add_parser(sub)
     cli_laban.add_parser(sub)
     cli_learn.add_parser(sub, _input_options, _segmenter_options)
     cli_replay.add_parser(sub, _input_options, _segmenter_options)

@@ -235,12 +235,27 @@ def cmd_label(args) -> int:
 
 
 def cmd_record(args) -> int:
-    _drive_name(args.drive, "--drive")
+    """Record labelled takes with the controllers: each take starts and stops with the
+    trigger, then gets the Drive in its header."""
+    from dataclasses import replace
+
+    from doodle.fileformat import write_doodle
+    from doodle.loader import load
+    from doodle.recorder import record
+    from doodle.sources import OpenVRSource
+
+    drive = _drive_name(args.drive, "--drive")
     try:
-        import openvr  # noqa: F401
-    except ImportError:
-        raise DoodleError("recording needs SteamVR and the openvr package, which this machine does not have; "
-                          "record with any tracker, convert with `doodle import`, then `doodle laban label FILE "
-                          f"--drive {args.drive}`") from None
-    raise DoodleError("the controller recorder is not built yet (issue 9); record elsewhere and use "
-                      "`doodle laban label`")
+        source = OpenVRSource()
+    except DoodleError as e:
+        raise DoodleError(f"{e}; or record elsewhere and label the file with `doodle laban label FILE "
+                          f"--drive {drive}`") from None
+    try:
+        print(f"press the trigger, perform a {drive}, press the trigger again", flush=True)
+        result = record(source, args.output, wait_for_trigger=True)
+    finally:
+        source.close()
+    doodle = load(result.path)
+    write_doodle(result.path, replace(doodle, meta=dict(doodle.meta, **{"x-drive": drive})))
+    print(f"{result.path}: {result.duration:.2f} s, x-drive {drive}")
+    return 0

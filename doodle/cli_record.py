@@ -50,7 +50,8 @@ class _View:
     """The live terminal view: one line per action, lost/found tracking, and on a terminal
     the tokens in progress on a line that keeps being rewritten."""
 
-    def __init__(self, out=sys.stdout):
+    def __init__(self, out=None):
+        out = out or sys.stdout  # looked up now, not at import: the stream may have been replaced
         self.out, self.tty, self.pending = out, out.isatty(), {}
 
     def line(self, text: str) -> None:

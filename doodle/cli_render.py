@@ -66,8 +66,8 @@ def cmd_render(args) -> int:
     from doodle import render
 
     out = Path(args.output)
-    kind = KINDS.get(out.suffix.lower())
-    if kind is None:
+    suffix = out.suffix.lower()
+    if suffix not in KINDS:
         raise DoodleError(f"{out}: unknown output type {out.suffix or '(none)'!r}; "
                           "use .png (key-frame sheet), .gif or .mp4")
     size = parse_size(args.size)
@@ -85,19 +85,42 @@ def cmd_render(args) -> int:
     terrain = parse_terrain(args.terrain) if args.terrain else None
     doodle = load(args.file)
     results = compile_doodle(doodle, args.library, fps=args.fps, terrain=terrain, effort_model=load_effort_model(None))
-    count = args.frames if args.frames is not None else (SHEET_FRAMES if out.suffix.lower() == ".png" else None)
+    count = args.frames if args.frames is not None else (SHEET_FRAMES if suffix == ".png" else None)
     picks = render.frame_indices(results, frames=count)
     frames = render.render_frames(results, terrain, size, frames=count, progress=_progress)
-    out.parent.mkdir(parents=True, exist_ok=True)
+    try:
+        out.parent.mkdir(parents=True, exist_ok=True)
+    except OSError as e:
+        raise DoodleError(f"{out}: cannot create its folder: {e.strerror or e}") from None
     start = time.perf_counter()
-    if out.suffix.lower() == ".png":
-        render.write_sheet(frames, out, columns=SHEET_COLUMNS, labels=[_label(results, int(f), args.fps) for f in picks])
+    if suffix == ".png":
+        labels = [_label(results, int(f), args.fps) for f in picks]
+        render.write_sheet(frames, out, columns=SHEET_COLUMNS, labels=labels)
     else:
         # N frames spread over the clip play at the rate that keeps the clip's length.
         span = picks[-1] - picks[0]
         fps = args.fps * (len(picks) - 1) / span if count is not None and span > 0 else args.fps
-        (render.write_gif if out.suffix.lower() == ".gif" else render.write_mp4)(frames, out, fps=fps)
+        (render.write_gif if suffix == ".gif" else render.write_mp4)(frames, out, fps=fps)
     seconds = time.perf_counter() - start
-    print(f"{out}: {kind} of {len(picks)} frames at {size[0]}x{size[1]} "
+    print(f"{out}: {KINDS[suffix]} of {len(picks)} frames at {size[0]}x{size[1]} "
           f"({1000 * seconds / len(picks):.0f} ms per frame)")
     return 0
+
+
+def preview_sheet(results, terrain, path, fps: float, size=(480, 360)) -> Path | None:
+    """The key-frame sheet `doodle compile --preview` puts beside the BVH; None (with a
+    warning) where pyrender or EGL is missing — the other previews still come."""
+    import warnings
+
+    from doodle import render
+
+    try:
+        render.load_pyrender()
+    except DoodleError as e:
+        warnings.warn(f"no 3D preview: {e}")
+        return None
+    picks = render.frame_indices(results, frames=SHEET_FRAMES)
+    frames = render.render_frames(results, terrain, size, frames=SHEET_FRAMES)
+    render.write_sheet(frames, Path(path), columns=SHEET_COLUMNS, labels=[_label(results, int(f), fps) for f in picks])
+    return Path(path)
+

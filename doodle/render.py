@@ -61,12 +61,16 @@ def load_pyrender():
     try:
         import pyrender
     except Exception as e:  # ImportError, or OpenGL failing to find its platform library
-        raise DoodleError(f"3D rendering needs pyrender with EGL ({_first_line(e)}): {INSTALL}") from None
+        platform = os.environ["PYOPENGL_PLATFORM"]
+        raise DoodleError(f"3D rendering needs pyrender and OpenGL through {platform} ({_first_line(e)}): "
+                          f"{INSTALL}") from None
     return pyrender
 
 
 def _first_line(e: BaseException) -> str:
-    text = str(e).strip()
+    """An exception's message on one line (PyOpenGL raises with a tuple of strings)."""
+    parts = [str(a) for a in e.args if isinstance(a, str) and a] if len(e.args) > 1 else [str(e)]
+    text = ": ".join(parts).strip()
     return text.splitlines()[0] if text else type(e).__name__
 
 
@@ -157,9 +161,9 @@ def _frames(renderer, still, moving, figures, picks, progress, pyrender):
                 node = moving.add(pyrender.Mesh([figure.primitive(int(f), pyrender) for figure in figures]))
                 rgba, near = renderer.render(moving, flags=pyrender.RenderFlags.RGBA)
                 frame = _over(rgba, near, background, depth)
-            yield np.array(frame, dtype=np.uint8)
             if progress:
                 progress(i + 1, len(picks))
+            yield np.array(frame, dtype=np.uint8)
     finally:
         renderer.delete()
 

@@ -170,7 +170,8 @@ def test_preview_images(tmp_path):
     out = tmp_path / "out"
     assert main(["compile", str(DEMO), "-o", str(out), "--preview"]) == 0
     report = json.loads((out / "report.json").read_text())
-    assert sorted(Path(p).name for p in report["preview"]) == ["keyframes.png", "plan.png"]
+    names = sorted(Path(p).name for p in report["preview"])
+    assert names in (["keyframes.png", "plan.png"], ["keyframes.png", "plan.png", "render.png"])  # render: with EGL
     for name in ("plan.png", "keyframes.png"):
         image = mpimg.imread(out / name)[..., :3]
         ink = (image.mean(axis=2) < 0.6).mean()
