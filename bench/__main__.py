@@ -1,9 +1,9 @@
-"""Run every benchmark and print its figures beside a baseline measured in the same run."""
+"""Run every benchmark and print its figures beside a baseline measured in the same run (where one exists)."""
 
 import sys
 
-from bench import (bvh_speed, laban_effort, learning, matcher_speed, real_gestures, replay_latency, segmenter_speed,
-                   stages_accuracy, stylize_speed, terrain_speed)
+from bench import (bvh_speed, laban_effort, learning, matcher_speed, real_gestures, render_speed, replay_latency,
+                   segmenter_speed, stages_accuracy, stylize_speed, terrain_speed)
 
 
 def main() -> int:
@@ -27,6 +27,8 @@ def main() -> int:
     learning.main()
     print()
     replay_latency.main()
+    print()
+    render_speed.main()
     return 0
 
 

@@ -166,7 +166,7 @@ def cmd_compile(args) -> int:
         effort_model = load_effort_model(args.effort_model)
     results = compile_doodle(doodle, args.library, not args.no_builtin, params, args.fps, args.scale, args.threshold,
                              not args.no_foot_pinning, terrain, args.jump_arc, args.retime, qualities, args.style,
-                             effort_model)
+                             effort_model, _progress_bar("segments"))
     out = Path(args.output)
     out.mkdir(parents=True, exist_ok=True)
     seconds = _seconds(doodle)
@@ -203,6 +203,19 @@ def cmd_compile(args) -> int:
               f"root deviation {m['root_deviation_m']} m, transition smoothness {m['transition_smoothness']}")
     print(f"{out / 'report.json'}" + (f"; preview: {', '.join(report['preview'])}" if args.preview else ""))
     return 0
+
+
+def _progress_bar(stage: str):
+    """A progress callback drawing a bar on stderr when it is a terminal (else None)."""
+    if not sys.stderr.isatty():
+        return None
+
+    def show(i: int, n: int) -> None:
+        done = int(24 * i / max(n, 1))
+        print(f"\r  {stage:<10} [{'#' * done}{'.' * (24 - done)}] {i}/{n}", end="" if i < n else "\n",
+              file=sys.stderr, flush=True)
+
+    return show
 
 
 def _effort_entry(effort) -> dict | None:

@@ -63,7 +63,8 @@ class Animation:
 def compile_doodle(doodle: Doodle, library_dir=None, use_builtin: bool = True, params: SegmenterParams = SegmenterParams(),
                    fps: float = 30.0, scale: float | None = None, threshold: float = 2.0,
                    pin: bool = True, terrain=None, jump_arc: str = "clip", retime: str = "uniform",
-                   qualities: dict | None = None, style: str = "modifiers", effort_model=None) -> list[Animation]:
+                   qualities: dict | None = None, style: str = "modifiers", effort_model=None,
+                   progress=None) -> list[Animation]:
     """Every track of a doodle turned into an animation on one timeline.
 
     Feet are pinned in their contacts unless ``pin`` is False. ``qualities`` maps
@@ -72,6 +73,7 @@ def compile_doodle(doodle: Doodle, library_dir=None, use_builtin: bool = True, p
     thesis's modifiers or, with ``style="preferred"``, as its study's preferred combination.
     Segments without a quality given get the one ``effort_model`` (a
     :class:`laban.models.EffortModel`) recognises in the hand's motion, if one is given.
+    ``progress(done, total)`` is called as segments are done (for a progress bar).
     """
     from library.manifest import builtin as builtin_library
     from library.manifest import combine
@@ -93,11 +95,15 @@ def compile_doodle(doodle: Doodle, library_dir=None, use_builtin: bool = True, p
     duration = float(doodle.t[-1])
     times = np.arange(int(np.floor(duration * fps)) + 1) / fps
     skeleton, rest = _compile_skeleton(library, user, clips)
+    total, done = sum(len(segs) for _, segs in recognised.values()), 0
     for track in doodle.tracks:
         tokens, segments = recognised[track.name]
         spans, placed, used = [], [], {}
         styles, efforts = [], []
         for index, seg in enumerate(segments):
+            if progress:
+                done += 1
+                progress(done, total)
             on_skeleton = [c for c in clips.get(seg.action, []) if c.motion.skeleton.names == skeleton.names]
             clip = on_skeleton[0] if on_skeleton else rest
             name = seg.action if seg.action in library.names else "Idle"
