@@ -28,6 +28,47 @@ def add_parser(sub, input_options, segmenter_options) -> None:
     p.set_defaults(run=cmd_learn)
 
 
+TAKES = 3
+COUNTDOWN = 3  # seconds before each take
+
+
+def open_source():
+    """The controllers (a DoodleError in one line without SteamVR)."""
+    from doodle.sources import OpenVRSource
+
+    return OpenVRSource()
+
+
+def record_takes(name: str, folder: Path, takes: int = TAKES, sleep=time.sleep) -> list[str]:
+    """The wizard: ``takes`` performances recorded with the controllers, each started and
+    stopped with the trigger after a countdown, shown live; saved in ``folder/takes/``."""
+    from doodle.cli_record import _View
+    from doodle.recorder import record
+
+    try:
+        source = open_source()
+    except DoodleError as e:
+        raise DoodleError(f"{e}; or record each example elsewhere and give the files: doodle learn NAME EX1 EX2 EX3 "
+                          "--library DIR") from None
+    paths = []
+    try:
+        (folder / "takes").mkdir(parents=True, exist_ok=True)
+        safe = "".join(c if c.isalnum() or c in "-_" else "_" for c in name)
+        for k in range(1, takes + 1):
+            path = folder / "takes" / f"{safe}_{k}.doodle"
+            print(f"take {k}/{takes} of {name!r}: ", end="", flush=True)
+            for n in range(COUNTDOWN, 0, -1):
+                print(f"{n}… ", end="", flush=True)
+                sleep(1.0)
+            print("press the trigger, perform the gesture, press the trigger again", flush=True)
+            result = record(source, path, wait_for_trigger=True, on_event=_View(), overwrite=True)
+            print(f"  take {k}: {result.duration:.2f} s, {result.samples} samples → {path}", flush=True)
+            paths.append(str(path))
+    finally:
+        source.close()
+    return paths
+
+
 def cmd_learn(args) -> int:
     from doodle.cli import _load, _params
     from doodle.fileformat import atomic_write
@@ -37,9 +78,7 @@ def cmd_learn(args) -> int:
         manifest_path
 
     if args.record:
-        raise DoodleError("recording examples needs SteamVR and the openvr package, which this machine does not "
-                          "have; record each example elsewhere and give the files: doodle learn NAME EX1 EX2 EX3 "
-                          "--library DIR")
+        args.examples = record_takes(args.name, Path(args.library), TAKES)
     if len(args.examples) < 2:
         raise DoodleError(f"give at least two example files (three are best), got {len(args.examples)}")
     name = args.name.strip()

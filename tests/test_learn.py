@@ -177,3 +177,53 @@ def test_tolerance_field_and_per_action_limits(tmp_path):
                                          'expression = "T_X"\ntolerance = -1\n')
     with pytest.raises(DoodleError, match="action 'Zig': field 'tolerance' must be a number of edits"):
         load_library(folder)
+
+
+def test_record_wizard_with_a_synthetic_source(tmp_path, monkeypatch, capsys):
+    """`doodle learn NAME --record` through the recording loop: three takes, each between two
+    trigger presses, then learned and saved (a synthetic source stands in for SteamVR)."""
+    from doodle import cli_learn
+    from doodle.sources import SyntheticSource
+
+    seeds = iter(range(11, 30))
+
+    def fake_source():
+        d = synth_doodle({"c0": [stroke("T_STILL", 0.5), stroke("T_Z", 0.5), stroke("T_Y", 0.4), stroke("T_N_Z", 0.5),
+                                 stroke("T_STILL", 0.5)]}, rate=90, seed=next(seeds))
+        return SyntheticSource(d, triggers=[0.2, float(d.t[-1]) - 0.2])
+
+    class OneTakePerSource:  # each take reads from a fresh performance
+        def __init__(self):
+            self.current = fake_source()
+            self.tracks, self.rate, self.device = self.current.tracks, self.current.rate, self.current.device
+
+        def read(self):
+            frame = self.current.read()
+            if frame is None:
+                return None
+            return frame
+
+        def close(self):
+            pass
+
+    sources = OneTakePerSource()
+    real_record = __import__("doodle.recorder", fromlist=["record"]).record
+
+    def record_fresh(source, path, **kw):
+        sources.current = fake_source()
+        return real_record(sources, path, clock=lambda: 0.0, sleep=lambda s: None, **kw)
+
+    monkeypatch.setattr(cli_learn, "open_source", lambda: sources)
+    monkeypatch.setattr("doodle.recorder.record", record_fresh)
+    monkeypatch.setattr(cli_learn, "COUNTDOWN", 0)
+    lib = tmp_path / "wiz"
+    assert main(["learn", "Hop", "--record", "--library", str(lib)]) == 0
+    out = capsys.readouterr().out
+    assert out.count("perform the gesture") == 3 and "Hop (c0" in out
+    assert sorted(p.name for p in (lib / "takes").iterdir()) == ["Hop_1.doodle", "Hop_2.doodle", "Hop_3.doodle"]
+    from library.manifest import load_library
+
+    assert load_library(lib).names == ["Hop"]
+    monkeypatch.undo()
+    assert main(["learn", "X", "--record", "--library", str(tmp_path / "none")]) == 1
+    assert "SteamVR" in capsys.readouterr().err
