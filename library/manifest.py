@@ -31,6 +31,7 @@ A library is a folder holding ``library.toml``::
     [[interactions]]                 # optional: actions performed together (§6.2)
     name = "Slap"
     actions = ["Slap", "Slapped"]    # one per character, each an action of the library
+    constraints = ["D(0, 1, Personal)", "V(0, 1, 0.5)"]  # optional (§6.3, grammar.constraints)
 
 Errors name the file, the action and the field. A user library extends the built-in one
 and overrides its actions of the same name (:func:`combine`); an overriding action without
@@ -74,6 +75,7 @@ class ActionDef:
 class Interaction:
     name: str
     actions: tuple[str, ...]
+    constraints: tuple[str, ...] = ()  # in the thesis's notation, e.g. "D(0, 1, Personal)" (§6.3)
 
 
 @dataclass(frozen=True)
@@ -149,10 +151,19 @@ def _interaction(entry, i: int, path: Path, names: set) -> Interaction:
     acts = entry.get("actions")
     if not isinstance(acts, list) or len(acts) < 2 or not all(isinstance(a, str) for a in acts):
         raise DoodleError(f"{where}: field 'actions' must list at least two action names")
-    extra = set(entry) - {"name", "actions", "note"}
+    extra = set(entry) - {"name", "actions", "note", "constraints"}
     if extra:
         raise DoodleError(f"{where}: unknown field {sorted(extra)[0]!r}")
-    return Interaction(entry["name"], tuple(acts))
+    constraints = entry.get("constraints", [])
+    if not isinstance(constraints, list) or not all(isinstance(c, str) for c in constraints):
+        raise DoodleError(f"{where}: field 'constraints' must be a list of strings such as \"D(0, 1, Personal)\"")
+    from grammar.constraints import parse_constraints
+
+    try:
+        parse_constraints(constraints, entry["name"], len(acts))
+    except DoodleError as e:
+        raise DoodleError(f"{path}: {e}") from None
+    return Interaction(entry["name"], tuple(acts), tuple(constraints))
 
 
 def _action(entry, i: int, path: Path) -> ActionDef:
@@ -256,5 +267,8 @@ def format_library(library: Library, folder) -> str:
         lines.append("")
     for i in library.interactions:
         lines += ["[[interactions]]", f"name = {_toml_string(i.name)}",
-                  "actions = [" + ", ".join(_toml_string(x) for x in i.actions) + "]", ""]
+                  "actions = [" + ", ".join(_toml_string(x) for x in i.actions) + "]"]
+        if i.constraints:
+            lines.append("constraints = [" + ", ".join(_toml_string(c) for c in i.constraints) + "]")
+        lines.append("")
     return "\n".join(lines)

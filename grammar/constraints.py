@@ -1,0 +1,171 @@
+"""Interaction constraints (thesis §6.3, SPEC "Several characters"): pure functions on the
+characters' states at one time.
+
+* Distance (§6.3.1): ``D(i, j, α)`` holds when ``‖P_i − P_j‖ ≤ α``; α is a number of metres
+  or one of Hall's proxemic zones, computed from the characters' bounding-sphere radii:
+  Intimate ``r_i + r_j``, Personal ``2(r_i + r_j)``, Social ``4(…)``, Public ``8(…)``. The
+  distance is the thesis's full 3-D one. In doodle space a character is its figurine, so the
+  default radius is :data:`RADIUS` = 0.1 m (half the 20 cm prop of ``doodle.pipeline``).
+* Field of view (§6.3.2): ``V(i, j, γ)`` holds when ``dot(unit(P_j − P_i), F_i) ≥ γ`` (i sees
+  j), ``MV(i, j, β)`` when ``dot(F_i, F_j) ≤ β`` (they face each other for β < 0). ``F`` is
+  the figurine's front (its local +z) projected on the ground plane and normalised; the
+  direction ``P_j − P_i`` is projected on the ground too, so a height difference between the
+  figurines does not narrow the view. A figurine pointing straight up or down has no front
+  (zero vector): V then fails for any γ > 0.
+* Behaviour states (§6.3.3): a character's state is a set of boolean variables; an action or
+  interaction may require some true and some false (pre-conditions) and set or clear some
+  when it ends (post-conditions). :class:`Behaviour` is that, as plain sets; it is not yet
+  read from manifests nor used by the Contexter.
+
+Constraints are written in the thesis's notation, e.g. ``"D(0, 1, Personal)"``,
+``"V(1, 0, 0.5)"``, ``"MV(0, 1, -0.5)"``; indices are roles (the position of the action in
+the interaction's action list). :func:`parse_constraint` reads one, with errors naming the
+interaction and the constraint.
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from doodle.errors import DoodleError
+
+RADIUS = 0.1  # metres: bounding-sphere radius of a character in doodle (prop) space
+ZONES = {"intimate": 1.0, "personal": 2.0, "social": 4.0, "public": 8.0}  # × (r_i + r_j)
+KINDS = ("D", "V", "MV")
+_SYNTAX = re.compile(r"^\s*([A-Za-z]+)\s*\(\s*([^,()]*?)\s*,\s*([^,()]*?)\s*,\s*([^,()]*?)\s*\)\s*$")
+
+
+@dataclass(frozen=True, eq=False)
+class State:
+    """A character at one time: position (metres), ground-plane unit front, radius."""
+
+    position: np.ndarray  # (3,)
+    front: np.ndarray  # (3,) y = 0, unit or zero
+    radius: float = RADIUS
+
+
+def ground_front(q) -> np.ndarray:
+    """The figurine's front (local +z) of quaternion(s) xyzw, on the ground plane, unit
+    (zero where it points straight up or down). Works on (4,) or (n, 4)."""
+    f = Rotation.from_quat(np.asarray(q, dtype=float)).apply([0.0, 0.0, 1.0])
+    f = np.array(f, dtype=float)
+    f[..., 1] = 0.0
+    n = np.linalg.norm(f, axis=-1, keepdims=True)
+    return np.where(n > 1e-6, f / np.maximum(n, 1e-12), 0.0)
+
+
+def zone_distance(zone: str, r_i: float, r_j: float) -> float:
+    """The proxemic threshold of a zone name (case-insensitive) for radii r_i, r_j (§6.3.1)."""
+    return ZONES[zone.lower()] * (r_i + r_j)
+
+
+def distance(p_i, p_j) -> float:
+    return float(np.linalg.norm(np.asarray(p_j, float) - np.asarray(p_i, float)))
+
+
+def within(p_i, p_j, threshold: float) -> bool:
+    """``D(i, j, α)``: ``‖P_i − P_j‖ ≤ α``."""
+    return distance(p_i, p_j) <= threshold
+
+
+def sees(p_i, f_i, p_j, gamma: float) -> bool:
+    """``V(i, j, γ)``: ``dot(unit(P_j − P_i), F_i) ≥ γ``, on the ground plane."""
+    d = np.asarray(p_j, float) - np.asarray(p_i, float)
+    d[1] = 0.0
+    n = np.linalg.norm(d)
+    if n < 1e-9:  # same place: nothing to look towards
+        return False
+    return float(d @ np.asarray(f_i, float)) / n >= gamma
+
+
+def mutual_view(f_i, f_j, beta: float) -> bool:
+    """``MV(i, j, β)``: ``dot(F_i, F_j) ≤ β``."""
+    return float(np.asarray(f_i, float) @ np.asarray(f_j, float)) <= beta
+
+
+@dataclass(frozen=True)
+class Constraint:
+    """One constraint between roles i and j; ``value`` is a zone name or a number."""
+
+    kind: str  # "D", "V" or "MV"
+    i: int
+    j: int
+    value: str | float
+
+    def holds(self, state_i: State, state_j: State) -> bool:
+        if self.kind == "D":
+            alpha = (zone_distance(self.value, state_i.radius, state_j.radius) if isinstance(self.value, str)
+                     else self.value)
+            return within(state_i.position, state_j.position, alpha)
+        if self.kind == "V":
+            return sees(state_i.position, state_i.front, state_j.position, self.value)
+        return mutual_view(state_i.front, state_j.front, self.value)
+
+    def __str__(self) -> str:
+        v = self.value.capitalize() if isinstance(self.value, str) else f"{self.value:g}"
+        return f"{self.kind}({self.i}, {self.j}, {v})"
+
+
+def all_hold(constraints, states) -> bool:
+    """Every constraint holds for ``states`` indexed by role (the conjunction, §6.2.1)."""
+    return all(c.holds(states[c.i], states[c.j]) for c in constraints)
+
+
+def parse_constraint(text: str, interaction: str = "", roles: int | None = None) -> Constraint:
+    """A constraint in the thesis's notation; DoodleError naming the interaction and text."""
+    where = f"interaction {interaction!r}: constraint {text!r}" if interaction else f"constraint {text!r}"
+    if not isinstance(text, str):
+        raise DoodleError(f"{where}: expected a string such as \"D(0, 1, Personal)\"")
+    m = _SYNTAX.match(text)
+    if not m:
+        raise DoodleError(f"{where}: expected KIND(i, j, value), e.g. D(0, 1, Personal), V(0, 1, 0.5), MV(0, 1, -0.5)")
+    kind, a, b, raw = m.groups()
+    if kind not in KINDS:
+        raise DoodleError(f"{where}: unknown kind {kind!r} (known: {', '.join(KINDS)})")
+    if not (a.isdigit() and b.isdigit()):
+        raise DoodleError(f"{where}: character indices must be whole numbers (roles 0, 1, …)")
+    i, j = int(a), int(b)
+    if i == j:
+        raise DoodleError(f"{where}: relates a character to itself")
+    if roles is not None and max(i, j) >= roles:
+        raise DoodleError(f"{where}: role {max(i, j)} out of range (the interaction has {roles} actions)")
+    value: str | float
+    if kind == "D" and raw.lower() in ZONES:
+        value = raw.lower()
+    else:
+        try:
+            value = float(raw)
+        except ValueError:
+            extra = f" or a zone ({', '.join(z.capitalize() for z in ZONES)})" if kind == "D" else ""
+            raise DoodleError(f"{where}: value {raw!r} is not a number{extra}") from None
+        if not np.isfinite(value):
+            raise DoodleError(f"{where}: value must be finite")
+        if kind == "D" and value < 0:
+            raise DoodleError(f"{where}: a distance must not be negative")
+        if kind in ("V", "MV") and not -1.0 <= value <= 1.0:
+            raise DoodleError(f"{where}: a cosine must be in [-1, 1]")
+    return Constraint(kind, i, j, value)
+
+
+def parse_constraints(texts, interaction: str = "", roles: int | None = None) -> tuple[Constraint, ...]:
+    return tuple(parse_constraint(t, interaction, roles) for t in texts)
+
+
+@dataclass(frozen=True)
+class Behaviour:
+    """Pre/post-conditions on a character's boolean state variables (§6.3.3)."""
+
+    requires: frozenset = field(default_factory=frozenset)  # must be true before
+    forbids: frozenset = field(default_factory=frozenset)  # must be false before
+    sets: frozenset = field(default_factory=frozenset)  # true after
+    clears: frozenset = field(default_factory=frozenset)  # false after
+
+    def allowed(self, state: frozenset) -> bool:
+        return self.requires <= state and not (self.forbids & state)
+
+    def after(self, state: frozenset) -> frozenset:
+        return (frozenset(state) - self.clears) | self.sets

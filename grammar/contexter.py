@@ -1,0 +1,182 @@
+"""The Contexter: interactions between characters recognised across tracks (thesis §6.2.1).
+
+An interaction ``{A_n, C_m}`` (a ``[[interactions]]`` entry of a library) is ``n`` actions,
+one per character (role 0, 1, …), and ``m`` constraints between roles
+(:mod:`grammar.constraints`, §6.3). This first version works on the per-track Matchers'
+segments (batch; :func:`recognize_interactions` runs the whole pipeline):
+
+* **Candidates.** For every interaction and every assignment of its roles to distinct tracks
+  (``k!·C(n, k)`` configurations, :func:`itertools.permutations`), every tuple of segments —
+  on each assigned track, one segment of that role's action — whose time spans overlap (one
+  common open interval ``[max start, min end]``).
+* **Constraints** are evaluated on that overlap, sample by sample (the first assigned
+  track's sample times; the others' nearest samples; samples where a track lost tracking
+  are skipped). With ``mode="any"`` (default) the interaction holds when at some sample of
+  the overlap *every* constraint holds at once — a kiss needs the two figurines within the
+  Intimate distance at one moment, not throughout the back-and-forth gesture; with
+  ``mode="all"`` they must hold at every valid sample. Each character's state there is its
+  position, its ground-plane front (:func:`grammar.constraints.ground_front`) and its radius
+  (``radius``: one number for all, or per track; default 0.1 m, a figurine in prop scale).
+* **Priority.** Candidates are taken earliest overlap first, then the longest (most tokens,
+  "keep the longest sequence", §6.2.1), then library order and assignment order; a segment
+  belongs to at most one interaction. A taken segment is replaced by an
+  :class:`InteractionSegment` — the same span and action (the role's, e.g. "Slap" on the
+  slapper, "Slapped" on the other) with the interaction's name and the role — so
+  interactions win over the independent actions they cover; other segments stay as they are.
+
+Not yet here: the streaming form (the thesis reads tracks in parallel and stacks the
+independent actions while an interaction is partially matched), matching interactions on
+token strings of their own rather than on the independent segmentation, and behaviour
+states (§6.3.3, :class:`grammar.constraints.Behaviour` exists but is not applied).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from itertools import permutations, product
+
+import numpy as np
+
+from grammar.constraints import RADIUS, Constraint, State, all_hold, ground_front, parse_constraints
+from grammar.matcher import Segment
+
+MODES = ("any", "all")
+
+
+@dataclass(frozen=True)
+class InteractionSegment(Segment):
+    """A segment recognised as one role of an interaction."""
+
+    interaction: str = ""
+    role: int = 0
+
+
+@dataclass(frozen=True)
+class Rule:
+    """An interaction ready to match: its actions by role and its parsed constraints."""
+
+    name: str
+    actions: tuple[str, ...]
+    constraints: tuple[Constraint, ...]
+
+
+@dataclass(frozen=True)
+class Found:
+    """One recognised interaction: per role, the track and the segment's index there."""
+
+    interaction: str
+    tracks: tuple[str, ...]
+    indices: tuple[int, ...]
+    t0: float  # the overlap, seconds
+    t1: float
+
+
+class Contexter:
+    """Interactions of a library over per-track segments (batch form, see the module)."""
+
+    def __init__(self, interactions, radius: float | dict = RADIUS, mode: str = "any"):
+        if mode not in MODES:
+            raise ValueError(f"mode must be one of {MODES}, not {mode!r}")
+        self.rules = [Rule(i.name, tuple(i.actions), parse_constraints(i.constraints, i.name, len(i.actions)))
+                      for i in interactions]
+        self.radius, self.mode = radius, mode
+
+    def _radius(self, track: str) -> float:
+        return float(self.radius.get(track, RADIUS)) if isinstance(self.radius, dict) else float(self.radius)
+
+    def candidates(self, doodle, segments: dict[str, list[Segment]]) -> list[Found]:
+        """Every (interaction, assignment, segment tuple) whose segments overlap and whose
+        constraints hold, in priority order."""
+        tracks = {tr.name: tr for tr in doodle.tracks}
+        names = [n for n in segments if n in tracks]
+        spans = {n: [(_time(tracks[n], s.start), _time(tracks[n], s.end)) for s in segments[n]] for n in names}
+        found = []
+        for order, rule in enumerate(self.rules):
+            k = len(rule.actions)
+            for assigned in permutations(names, k):
+                choices = [[x for x, s in enumerate(segments[tr]) if s.action == act]
+                           for tr, act in zip(assigned, rule.actions)]
+                for picked in product(*choices):
+                    t0 = max(spans[tr][x][0] for tr, x in zip(assigned, picked))
+                    t1 = min(spans[tr][x][1] for tr, x in zip(assigned, picked))
+                    if not t0 < t1:
+                        continue
+                    if self._constraints_hold(rule, [tracks[tr] for tr in assigned], t0, t1):
+                        length = sum(segments[tr][x].stop - segments[tr][x].first for tr, x in zip(assigned, picked))
+                        found.append(((t0, -length, order), Found(rule.name, assigned, tuple(picked), t0, t1)))
+        found.sort(key=lambda item: item[0])  # stable: assignment order breaks the last ties
+        return [f for _, f in found]
+
+    def _constraints_hold(self, rule: Rule, tracks: list, t0: float, t1: float) -> bool:
+        if not rule.constraints:
+            return True
+        ref = tracks[0].t
+        times = ref[(ref >= t0) & (ref <= t1)]
+        if len(times) == 0:
+            times = np.array([(t0 + t1) / 2])
+        poses = []
+        ok = np.ones(len(times), dtype=bool)
+        for tr in tracks:
+            idx = _nearest(tr.t, times)
+            p, q = tr.p[idx], tr.q[idx]
+            ok &= tr.valid[idx] & np.isfinite(p).all(axis=1) & np.isfinite(q).all(axis=1)
+            poses.append((p, np.where(np.isfinite(q), q, [0.0, 0.0, 0.0, 1.0]), self._radius(tr.name)))
+        fronts = [ground_front(q) for _, q, _ in poses]
+        results = []
+        for s in np.flatnonzero(ok):
+            states = [State(p[s], f[s], r) for (p, _, r), f in zip(poses, fronts)]
+            holds = all_hold(rule.constraints, states)
+            if self.mode == "any" and holds:
+                return True
+            if self.mode == "all" and not holds:
+                return False
+            results.append(holds)
+        return bool(results) and self.mode == "all"
+
+    def resolve(self, doodle, segments: dict[str, list[Segment]]) -> dict[str, list[Segment]]:
+        """Per track, its segments with those of recognised interactions relabelled."""
+        return relabel(segments, self.select(doodle, segments))
+
+    def select(self, doodle, segments: dict[str, list[Segment]]) -> list[Found]:
+        """The recognised interactions: candidates taken greedily, a segment used once."""
+        used, taken = set(), []
+        for f in self.candidates(doodle, segments):
+            keys = set(zip(f.tracks, f.indices))
+            if keys & used:
+                continue
+            used |= keys
+            taken.append(f)
+        return taken
+
+
+def relabel(segments: dict[str, list[Segment]], found: list[Found]) -> dict[str, list[Segment]]:
+    out = {tr: list(segs) for tr, segs in segments.items()}
+    for f in found:
+        for role, (tr, x) in enumerate(zip(f.tracks, f.indices)):
+            s = out[tr][x]
+            out[tr][x] = InteractionSegment(s.action, s.first, s.stop, s.start, s.end, s.exact, s.distance,
+                                            interaction=f.interaction, role=role)
+    return out
+
+
+def recognize_interactions(doodle, compiled, params=None, threshold: float = 2.0, radius: float | dict = RADIUS,
+                           mode: str = "any") -> dict[str, list[Segment]]:
+    """Per track, the segments of :func:`doodle.pipeline.recognize` with the library's
+    interactions recognised across tracks (:class:`InteractionSegment` where they are)."""
+    from doodle.pipeline import recognize
+    from doodle.segmenter import SegmenterParams
+
+    recognised = recognize(doodle, compiled, params or SegmenterParams(), threshold)
+    segments = {tr: segs for tr, (_, segs) in recognised.items()}
+    return Contexter(compiled.library.interactions, radius, mode).resolve(doodle, segments)
+
+
+def _time(track, index: int) -> float:
+    return float(track.t[min(max(index, 0), len(track.t) - 1)])
+
+
+def _nearest(t: np.ndarray, times: np.ndarray) -> np.ndarray:
+    if len(t) < 2:
+        return np.zeros(len(times), dtype=np.int64)
+    i = np.clip(np.searchsorted(t, times), 1, len(t) - 1)
+    return np.where(np.abs(t[i - 1] - times) <= np.abs(t[i] - times), i - 1, i)
