@@ -24,10 +24,13 @@ segments (batch; :func:`recognize_interactions` runs the whole pipeline):
   slapper, "Slapped" on the other) with the interaction's name and the role — so
   interactions win over the independent actions they cover; other segments stay as they are.
 
+Roles that are ``interaction_only`` actions are matched on each track's tokens by a Matcher
+of their own (:func:`recognize_interactions`) and, when the interaction holds, replace the
+independent segments they cover.
+
 Not yet here: the streaming form (the thesis reads tracks in parallel and stacks the
-independent actions while an interaction is partially matched), matching interactions on
-token strings of their own rather than on the independent segmentation, and behaviour
-states (§6.3.3, :class:`grammar.constraints.Behaviour` exists but is not applied).
+independent actions while an interaction is partially matched), and behaviour states
+(§6.3.3, :class:`grammar.constraints.Behaviour` exists but is not applied).
 """
 
 from __future__ import annotations
@@ -162,13 +165,45 @@ def relabel(segments: dict[str, list[Segment]], found: list[Found]) -> dict[str,
 def recognize_interactions(doodle, compiled, params=None, threshold: float = 2.0, radius: float | dict = RADIUS,
                            mode: str = "any") -> dict[str, list[Segment]]:
     """Per track, the segments of :func:`doodle.pipeline.recognize` with the library's
-    interactions recognised across tracks (:class:`InteractionSegment` where they are)."""
+    interactions recognised across tracks (:class:`InteractionSegment` where they are).
+
+    Roles that are ordinary actions are looked for among each track's segments; roles that
+    are ``interaction_only`` actions (the thesis's Slap ``(T_N_Z)+ T_Z``, Slapped
+    ``T_STILL+``…) are matched on the track's tokens by a Matcher of their own, and where
+    such an interaction is recognised its segment replaces the independent segments it
+    covers (interactions take priority, §6.2.1)."""
     from doodle.pipeline import recognize
     from doodle.segmenter import SegmenterParams
+    from grammar.matcher import match
 
     recognised = recognize(doodle, compiled, params or SegmenterParams(), threshold)
     segments = {tr: segs for tr, (_, segs) in recognised.items()}
-    return Contexter(compiled.library.interactions, radius, mode).resolve(doodle, segments)
+    pools = {tr: list(segs) for tr, segs in segments.items()}
+    if compiled.roles is not None:
+        auto = compiled.roles.automaton(threshold)
+        for tr, (tokens, _) in recognised.items():
+            pools[tr] += [s for s in match(tokens, auto, tr) if s.action != "unknown"]
+    found = Contexter(compiled.library.interactions, radius, mode).select(doodle, pools)
+    return splice(segments, pools, found)
+
+
+def splice(segments: dict[str, list[Segment]], pools: dict[str, list[Segment]], found: list[Found]):
+    """``segments`` with the found interactions' segments (indices into ``pools``) in
+    place: an independent segment relabelled, or a role segment of its own replacing the
+    independent segments it covers for at least half of their tokens."""
+    out = {tr: list(segs) for tr, segs in segments.items()}
+    for f in found:
+        for role, (tr, x) in enumerate(zip(f.tracks, f.indices)):
+            s = pools[tr][x]
+            new = InteractionSegment(s.action, s.first, s.stop, s.start, s.end, s.exact, s.distance,
+                                     interaction=f.interaction, role=role)
+            if x < len(segments[tr]):
+                out[tr] = [new if o is s else o for o in out[tr]]
+                continue
+            kept = [o for o in out[tr]
+                    if 2 * (min(o.stop, s.stop) - max(o.first, s.first)) < (o.stop - o.first)]
+            out[tr] = sorted(kept + [new], key=lambda o: (o.first, o.stop))
+    return out
 
 
 def _time(track, index: int) -> float:

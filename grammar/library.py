@@ -15,6 +15,7 @@ from library.manifest import ActionDef, Library
 class Compiled:
     library: Library
     dfas: tuple[DFA, ...]
+    roles: "Compiled | None" = None  # interaction-only actions, matched by the Contexter
 
     def automaton(self, threshold: float = 2.0, direction_costs: bool = False) -> Automaton:
         return Automaton(self.library.names, list(self.dfas), threshold, direction_costs,
@@ -46,11 +47,22 @@ def compile_library(library: Library) -> Compiled:
         for a in inter.actions:
             if a not in names:
                 raise DoodleError(f"{library.source}: interaction {inter.name!r}: no action {a!r} in the library")
-    recognisable = Library(library.name, tuple(a for a in library.actions if a.expression.strip()), library.source,
+    recognisable = Library(library.name, tuple(a for a in library.actions if a.expression.strip()
+                                               and not a.interaction_only), library.source,
                            library.roles, library.interactions)
     if not recognisable.actions:
         raise DoodleError(f"{library.source}: no action has an expression to recognise")
-    return Compiled(recognisable, tuple(compile_action(a) for a in recognisable.actions))
+    return Compiled(recognisable, tuple(compile_action(a) for a in recognisable.actions), compile_roles(library))
+
+
+def compile_roles(library: Library) -> Compiled | None:
+    """The automata of the actions that are only roles of interactions (``interaction_only``:
+    the Contexter matches them; independent recognition never does), or None."""
+    roles = tuple(a for a in library.actions if a.interaction_only and a.expression.strip())
+    if not roles:
+        return None
+    lib = Library(library.name, roles, library.source, library.roles, library.interactions)
+    return Compiled(lib, tuple(compile_action(a) for a in roles))
 
 
 @dataclass(frozen=True)

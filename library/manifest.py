@@ -51,7 +51,8 @@ from doodle.errors import DoodleError
 BUILTIN = Path(__file__).resolve().parent / "builtin"
 RESERVED = {"unknown"}
 FLAGS = ("cyclic", "in_place", "jumping")
-ACTION_KEYS = {"name", "expression", "note", "flags_note", "clips", "stages", "cycle_length", "tolerance", *FLAGS}
+ACTION_KEYS = {"name", "expression", "note", "flags_note", "clips", "stages", "cycle_length", "tolerance",
+               "interaction_only", *FLAGS}
 ROLES = ("pelvis", "chest", "head", "left_foot", "right_foot", "left_hand", "right_hand")
 
 
@@ -69,6 +70,7 @@ class ActionDef:
     cycle_length: float | None = None  # metres per cycle
     roles: dict = field(default_factory=dict)  # its library's [skeleton] table: role -> joint name
     tolerance: float | None = None  # edits a performance may be from the expression (None: the Matcher's)
+    interaction_only: bool = False  # its expression is a role of an interaction, never matched alone
 
 
 @dataclass(frozen=True)
@@ -199,6 +201,9 @@ def _action(entry, i: int, path: Path) -> ActionDef:
     if tolerance is not None and (not isinstance(tolerance, (int, float)) or isinstance(tolerance, bool)
                                   or not 0 <= tolerance <= 20):
         raise DoodleError(f"{where}: field 'tolerance' must be a number of edits from 0 to 20")
+    interaction_only = entry.get("interaction_only", False)
+    if not isinstance(interaction_only, bool):
+        raise DoodleError(f"{where}: field 'interaction_only' must be true or false, not {interaction_only!r}")
     flags = {}
     for flag in FLAGS:
         value = entry.get(flag, False)
@@ -208,7 +213,8 @@ def _action(entry, i: int, path: Path) -> ActionDef:
     return ActionDef(name, expression, note=str(entry.get("note", "")), source=str(path), clips=resolved,
                      stages=tuple(stages) if stages is not None else None,
                      cycle_length=float(cycle) if cycle is not None else None,
-                     tolerance=float(tolerance) if tolerance is not None else None, **flags)
+                     tolerance=float(tolerance) if tolerance is not None else None,
+                     interaction_only=interaction_only, **flags)
 
 
 def builtin() -> Library:
@@ -262,6 +268,8 @@ def format_library(library: Library, folder) -> str:
             lines.append(f"cycle_length = {a.cycle_length:.4f}")
         if a.tolerance is not None:
             lines.append(f"tolerance = {a.tolerance:g}")
+        if a.interaction_only:
+            lines.append("interaction_only = true")
         if a.note:
             lines.append(f"note = {_toml_string(a.note)}")
         lines.append("")

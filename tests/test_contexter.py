@@ -16,13 +16,14 @@ from grammar.library import compile_library, overlaps
 from grammar.matcher import Segment
 from library.manifest import Interaction, builtin, format_library, load_library
 
-# The built-in Slap, Slapped and Kiss have clips but no expressions yet: the scenes give them
-# some (Kiss is the thesis's, §6.2.1), checked below not to overlap the table's actions.
+# Here Slap, Slapped and Kiss are made ordinary actions with expressions of their own (Kiss
+# the thesis's, §6.2.1), checked below not to overlap the table's; the built-in library's
+# interaction-only roles (the thesis's §6.5 expressions) are tested at the end.
 EXPRESSIONS = {"Slap": "(T_Y)+ (T_N_X_N_Y)+ (T_X_Z)+", "Slapped": "(T_N_Z)+ (T_X_Y)+ (T_N_X_N_Y)+",
                "Kiss": "(T_N_Z)+ (T_Z)+ (T_N_Z)+ (T_Z)+"}
 LIBRARY = builtin()
-LIBRARY = replace(LIBRARY, actions=tuple(replace(a, expression=EXPRESSIONS.get(a.name, a.expression))
-                                         for a in LIBRARY.actions))
+LIBRARY = replace(LIBRARY, actions=tuple(replace(a, expression=EXPRESSIONS.get(a.name, a.expression),
+                                                 interaction_only=False) for a in LIBRARY.actions))
 COMPILED = compile_library(LIBRARY)
 SLAP, SLAPPED = ["T_Y", "T_N_X_N_Y", "T_X_Z"], ["T_N_Z", "T_X_Y", "T_N_X_N_Y"]
 KISS = ["T_N_Z", "T_Z", "T_N_Z", "T_Z"]
@@ -126,7 +127,7 @@ def test_parse_malformed_constraints_name_the_interaction(text, message):
 
 def test_builtin_interactions_carry_the_thesis_constraints():
     inter = {i.name: i for i in builtin().interactions}
-    assert inter["Slap"].constraints == ("D(0, 1, Personal)", "V(0, 1, 0.5)")
+    assert inter["Slap"].constraints == ("D(0, 1, Personal)", "V(0, 1, 0.5)", "V(1, 0, 0.5)")
     assert inter["Kiss"].constraints == ("D(0, 1, Intimate)", "V(0, 1, 0.5)", "V(1, 0, 0.5)")
 
 
@@ -176,9 +177,12 @@ def test_slap_not_recognised_when_a_constraint_fails(gap, q0, q1, why):
     assert got == {"c0": [("Slap", None, None)], "c1": [("Slapped", None, None)]}, why
 
 
-def test_slap_needs_only_the_slapper_to_see():
-    """Pierrot turned away is still slapped: Slap has V(0, 1) only."""
-    got = labels(recognize_interactions(scene(SLAP, SLAPPED, 0.3, FACING, FACING), COMPILED))
+def test_with_view_constraints_of_one_side_only():
+    """An interaction whose only view constraint is the slapper's: Pierrot turned away is
+    still slapped."""
+    one_way = replace(LIBRARY, interactions=(Interaction("Slap", ("Slap", "Slapped"),
+                                                          ("D(0, 1, Personal)", "V(0, 1, 0.5)")),))
+    got = labels(recognize_interactions(scene(SLAP, SLAPPED, 0.3, FACING, FACING), compile_library(one_way)))
     assert got == {"c0": [("Slap", "Slap", 0)], "c1": [("Slapped", "Slap", 1)]}
 
 
@@ -225,3 +229,23 @@ def test_a_segment_joins_at_most_one_interaction():
     got = labels(recognize_interactions(doodle, COMPILED))
     roles = [got[n][0][1] for n in ("c0", "c1", "c2")]
     assert roles.count("Kiss") == 2 and got["c1"][0][1] == "Kiss"
+
+
+# --- the built-in library: interaction-only roles (thesis §6.5) ----------------------------
+
+BUILTIN = compile_library(builtin())
+
+
+def test_builtin_slap_is_recognised_only_as_an_interaction():
+    """Colombine performs the thesis's Slap ``(T_N_Z)+ T_Z`` (alone it reads as a step back
+    and a step forward) while Pierrot keeps still in front of her, facing her: the Slap
+    interaction; apart, the same motion stays two steps and a pause."""
+    slap, still = ["T_N_Z", "T_Z"], []
+    close = labels(recognize_interactions(scene(slap, still, 0.3), BUILTIN))
+    assert close["c0"] == [("Slap", "Slap", 0)]
+    assert ("Slapped", "Slap", 1) in [(a, i, r) for a, i, r in
+                                      [(s.action, getattr(s, "interaction", None), getattr(s, "role", None))
+                                       for s in recognize_interactions(scene(slap, still, 0.3), BUILTIN)["c1"]]]
+    apart = labels(recognize_interactions(scene(slap, still, 1.0), BUILTIN))
+    assert [a for a, i, _ in apart["c0"]] == ["Walk Back", "Walk"] and all(i is None for _, i, _ in apart["c0"])
+    assert "Slap" not in BUILTIN.library.names and "Slap" in BUILTIN.roles.library.names
