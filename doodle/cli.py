@@ -118,7 +118,7 @@ def cmd_recognize(args) -> int:
         if args.json:
             segments = [
                 {"track": name, "action": s.action, "start": seconds(s.start), "end": seconds(s.end),
-                 "exact": s.exact, "distance": s.distance,
+                 "exact": s.exact, "distance": s.distance, "interaction": getattr(s, "interaction", None),
                  "samples": [s.start, s.end], "tokens": [k.name for k in toks[s.first:s.stop]]}
                 for name, (toks, segs) in result.items() for s in segs
             ]
@@ -126,7 +126,7 @@ def cmd_recognize(args) -> int:
             return
         print(f"{path}  ({doodle.t[-1]:.2f} s, {len(compiled.library.actions)} actions)")
         for name, (toks, segs) in result.items():
-            print(f"  {name}: {', '.join(s.action for s in segs) or '(nothing)'}")
+            print(f"  {name}: {', '.join(_named(s) for s in segs) or '(nothing)'}")
             if args.verbose:
                 for s in segs:
                     how = "exact" if s.exact else ("no match" if s.action == "unknown" else f"distance {s.distance:g}")
@@ -134,6 +134,12 @@ def cmd_recognize(args) -> int:
                           f"{' '.join(k.name for k in toks[s.first:s.stop])}")
 
     return _each_file(args, mounts, work)
+
+
+def _named(segment) -> str:
+    """An action, with the interaction it plays a role in."""
+    inter = getattr(segment, "interaction", None)
+    return f"{segment.action} [{inter}, role {segment.role}]" if inter else segment.action
 
 
 def cmd_compile(args) -> int:
@@ -179,6 +185,7 @@ def cmd_compile(args) -> int:
             "bvh": str(bvh), "frames": r.motion.frames,
             "segments": [{"index": i, "action": s.action, "start": seconds(s.start), "end": seconds(s.end),
                           "exact": s.exact, "distance": s.distance, "clip": r.clips.get(s.action),
+                          "interaction": getattr(s, "interaction", None), "role": getattr(s, "role", None),
                           "time": r.styles[i][0], "weight": r.styles[i][1], "effort": _effort_entry(r.efforts[i]),
                           "tokens": [k.name for k in r.tokens[s.first:s.stop]]} for i, s in enumerate(r.segments)],
             "transitions": [round(b, 6) for b in r.transitions],

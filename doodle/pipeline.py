@@ -28,11 +28,20 @@ def load_actions(library_dir=None, use_builtin: bool = True) -> Compiled:
 
 
 def recognize(doodle: Doodle, compiled: Compiled, params: SegmenterParams = SegmenterParams(),
-              threshold: float = 2.0, direction_costs: bool = False) -> dict[str, tuple[list[Token], list[Segment]]]:
-    """Per track: its tokens and the action segments recognised in them."""
+              threshold: float = 2.0, direction_costs: bool = False,
+              interactions: bool = True) -> dict[str, tuple[list[Token], list[Segment]]]:
+    """Per track: its tokens and the action segments recognised in them — with the
+    library's interactions between tracks recognised by the Contexter (§6.2.1) where the
+    doodle has several tracks (unless ``interactions`` is False)."""
     automaton = compiled.automaton(threshold, direction_costs)
     tokens = tokenize_doodle(doodle, params)
-    return {name: (toks, match(toks, automaton, name)) for name, toks in tokens.items()}
+    result = {name: (toks, match(toks, automaton, name)) for name, toks in tokens.items()}
+    if interactions and len(result) > 1 and compiled.library.interactions:
+        from grammar.contexter import with_interactions
+
+        resolved = with_interactions(doodle, compiled, result, threshold)
+        result = {name: (toks, resolved[name]) for name, (toks, _) in result.items()}
+    return result
 
 
 # --- compile: actions → animation (first version: flat ground, built-in clips) -------------
@@ -96,6 +105,7 @@ def compile_doodle(doodle: Doodle, library_dir=None, use_builtin: bool = True, p
     times = np.arange(int(np.floor(duration * fps)) + 1) / fps
     skeleton, rest = _compile_skeleton(library, user, clips)
     total, done = sum(len(segs) for _, segs in recognised.values()), 0
+    origin = doodle.tracks[0].p[0]  # one origin for the scene: characters keep their relative places
     for track in doodle.tracks:
         tokens, segments = recognised[track.name]
         spans, placed, used = [], [], {}
@@ -132,7 +142,7 @@ def compile_doodle(doodle: Doodle, library_dir=None, use_builtin: bool = True, p
             spans.append(span)
             placed.append((span, clip, travels))
             used[seg.action] = clip.path if on_skeleton else None
-        path, heading = world_path(track.t, track.p, spans, scale, terrain, jump_arc)
+        path, heading = world_path(track.t, track.p, spans, scale, terrain, jump_arc, origin)
         frame_path = np.column_stack([np.interp(times, track.t, path[:, k]) for k in range(3)])
         frame_heading = np.interp(times, track.t, heading)
         pieces = []
@@ -157,7 +167,7 @@ def compile_doodle(doodle: Doodle, library_dir=None, use_builtin: bool = True, p
         motion = clamp_to_ground(motion, terrain)
         ranges = [(int(np.searchsorted(times, sp.t0)), int(min(np.searchsorted(times, sp.t1), len(times) - 1)))
                   for sp in spans]
-        projected = (track.p - track.p[0]) * scale
+        projected = (track.p - origin) * scale
         projected[:, 1] = 0.0 if terrain is None else terrain.height(projected[:, [0, 2]])
         results.append(Animation(track.name, motion, segments, tokens, frame_path, transitions, used, rest.roles,
                                 terrain, ranges, projected, styles, efforts))

@@ -174,9 +174,16 @@ def recognize_interactions(doodle, compiled, params=None, threshold: float = 2.0
     covers (interactions take priority, §6.2.1)."""
     from doodle.pipeline import recognize
     from doodle.segmenter import SegmenterParams
+
+    recognised = recognize(doodle, compiled, params or SegmenterParams(), threshold, interactions=False)
+    return with_interactions(doodle, compiled, recognised, threshold, radius, mode)
+
+
+def with_interactions(doodle, compiled, recognised: dict, threshold: float = 2.0, radius: float | dict = RADIUS,
+                      mode: str = "any") -> dict[str, list[Segment]]:
+    """:func:`recognize_interactions` on per-track ``(tokens, segments)`` already recognised."""
     from grammar.matcher import match
 
-    recognised = recognize(doodle, compiled, params or SegmenterParams(), threshold)
     segments = {tr: segs for tr, (_, segs) in recognised.items()}
     pools = {tr: list(segs) for tr, segs in segments.items()}
     if compiled.roles is not None:

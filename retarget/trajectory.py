@@ -64,14 +64,16 @@ def hermite_arc(start: np.ndarray, end: np.ndarray, w: np.ndarray, alpha: float 
 
 
 def world_path(t: np.ndarray, p: np.ndarray, spans: list[Span], scale: float,
-               terrain=None, jump_arc: str = "clip") -> tuple[np.ndarray, np.ndarray]:
+               terrain=None, jump_arc: str = "clip", origin=None) -> tuple[np.ndarray, np.ndarray]:
     """Ground path (n, 3) of the root — on ``terrain`` (flat y = 0 when None), cast along
-    gravity — and heading (n,) in radians about +y (0 faces +z).
+    gravity — and heading (n,) in radians about +y (0 faces +z). The doodle point
+    ``origin`` (default: the track's first point) lands on the world origin: give every
+    track of a scene the same one so the characters keep their places relative to each other.
 
     ``jump_arc``: ``"clip"`` leaves a jump's height to its clip; ``"hermite"`` adds the
     beautified arc (α = 2.5) above the ground during the execution stage; ``"apex"`` the
     arc whose apex keeps the doodle's own (scaled) height above take-off."""
-    ground = (p - p[0]) * scale
+    ground = (p - (p[0] if origin is None else np.asarray(origin, dtype=float))) * scale
     ground[:, 1] = 0.0
     path = ground.copy()
     offset = np.zeros(3)

@@ -249,3 +249,31 @@ def test_builtin_slap_is_recognised_only_as_an_interaction():
     apart = labels(recognize_interactions(scene(slap, still, 1.0), BUILTIN))
     assert [a for a, i, _ in apart["c0"]] == ["Walk Back", "Walk"] and all(i is None for _, i, _ in apart["c0"])
     assert "Slap" not in BUILTIN.library.names and "Slap" in BUILTIN.roles.library.names
+
+
+def test_a_two_character_slap_scene_compiles_with_the_interaction(tmp_path, capsys):
+    """Colombine and Pierrot: one BVH per character on one timeline, the slap played by the
+    Slap and Slapped clips, the interaction in report.json and in `doodle recognize`."""
+    import json
+
+    from doodle.cli import main
+    from doodle.fileformat import write_doodle
+
+    path = tmp_path / "slap.doodle"
+    write_doodle(path, scene(["T_N_Z", "T_Z"], [], 0.3))
+    out = tmp_path / "out"
+    assert main(["compile", str(path), "-o", str(out), "--no-effort"]) == 0
+    report = json.loads((out / "report.json").read_text())
+    c0 = [s for s in report["tracks"]["c0"]["segments"] if s["interaction"]]
+    c1 = [s for s in report["tracks"]["c1"]["segments"] if s["interaction"]]
+    assert [(s["action"], s["role"]) for s in c0] == [("Slap", 0)] and c0[0]["clip"].endswith("slap.bvh")
+    assert [(s["action"], s["role"]) for s in c1] == [("Slapped", 1)] and c1[0]["clip"].endswith("slapped.bvh")
+    assert report["tracks"]["c0"]["frames"] == report["tracks"]["c1"]["frames"]
+    from retarget.bvh import read_bvh
+
+    roots = [read_bvh(out / f"{tr}.bvh", unit=1.0).translations[0, 0] for tr in ("c0", "c1")]
+    gap = np.linalg.norm((roots[1] - roots[0])[[0, 2]])
+    assert gap == pytest.approx(0.3 * 8.5, rel=0.15)  # the scene's places kept (prop 0.3 m × 8.5)
+    capsys.readouterr()
+    assert main(["recognize", str(path)]) == 0
+    assert "Slap [Slap, role 0]" in capsys.readouterr().out
