@@ -10,6 +10,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from doodle import quat
 from doodle.errors import DoodleError
 from doodle.model import Doodle
 from doodle.segmenter import SegmenterParams, tokenize_doodle
@@ -142,7 +143,9 @@ def compile_doodle(doodle: Doodle, library_dir=None, use_builtin: bool = True, p
             spans.append(span)
             placed.append((span, clip, travels))
             used[seg.action] = clip.path if on_skeleton else None
-        path, heading = world_path(track.t, track.p, spans, scale, terrain, jump_arc, origin)
+        front = quat.rotate(track.q[:1], np.array([[0.0, 0.0, 1.0]]))[0]  # the figurine's front at the start
+        path, heading = world_path(track.t, track.p, spans, scale, terrain, jump_arc, origin,
+                                   float(np.arctan2(front[0], front[2])))
         frame_path = np.column_stack([np.interp(times, track.t, path[:, k]) for k in range(3)])
         frame_heading = np.interp(times, track.t, heading)
         pieces = []

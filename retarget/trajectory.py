@@ -64,11 +64,14 @@ def hermite_arc(start: np.ndarray, end: np.ndarray, w: np.ndarray, alpha: float 
 
 
 def world_path(t: np.ndarray, p: np.ndarray, spans: list[Span], scale: float,
-               terrain=None, jump_arc: str = "clip", origin=None) -> tuple[np.ndarray, np.ndarray]:
+               terrain=None, jump_arc: str = "clip", origin=None, facing: float | None = None
+               ) -> tuple[np.ndarray, np.ndarray]:
     """Ground path (n, 3) of the root — on ``terrain`` (flat y = 0 when None), cast along
     gravity — and heading (n,) in radians about +y (0 faces +z). The doodle point
     ``origin`` (default: the track's first point) lands on the world origin: give every
     track of a scene the same one so the characters keep their places relative to each other.
+    ``facing``: the heading (rad) a character that never travels keeps — the figurine's own
+    (default 0, facing +z); one that travels faces its first travel direction from the start.
 
     ``jump_arc``: ``"clip"`` leaves a jump's height to its clip; ``"hermite"`` adds the
     beautified arc (α = 2.5) above the ground during the execution stage; ``"apex"`` the
@@ -86,7 +89,7 @@ def world_path(t: np.ndarray, p: np.ndarray, spans: list[Span], scale: float,
             offset -= moved
         elif s.jumping:
             path[seg] = _retimed_jump(t[seg], path[seg], s)
-    heading = _heading(t, path, spans)
+    heading = _heading(t, path, spans, facing or 0.0)
     if terrain is not None:
         path[:, 1] = terrain.height(path[:, [0, 2]])
     if jump_arc not in ("clip", "hermite", "apex"):
@@ -128,7 +131,7 @@ def _retimed_jump(t: np.ndarray, points: np.ndarray, span: Span) -> np.ndarray:
 TURNING_SPEED = 0.3  # m/s: slower drift of the path (a hand at rest) does not turn the character
 
 
-def _heading(t: np.ndarray, path: np.ndarray, spans: list[Span]) -> np.ndarray:
+def _heading(t: np.ndarray, path: np.ndarray, spans: list[Span], still: float = 0.0) -> np.ndarray:
     n = len(path)
     if n < 2:
         return np.zeros(n)
@@ -141,7 +144,7 @@ def _heading(t: np.ndarray, path: np.ndarray, spans: list[Span]) -> np.ndarray:
             moving[s.i0:s.i1] = False
         yaw[s.i0:s.i1] -= s.travel_yaw
     heading = np.zeros(n)
-    current = float(yaw[np.flatnonzero(moving)[0]]) if moving.any() else 0.0
+    current = float(yaw[np.flatnonzero(moving)[0]]) if moving.any() else still
     for i in range(n):
         if moving[i]:
             current = float(yaw[i])
