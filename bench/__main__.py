@@ -2,7 +2,7 @@
 
 import sys
 
-from bench import (bvh_speed, laban_effort, learning, matcher_speed, real_gestures, render_speed, replay_latency,
+from bench import (bvh_speed, contexter_speed, laban_effort, learning, matcher_speed, real_gestures, render_speed, replay_latency,
                    segmenter_speed, stages_accuracy, stylize_speed, terrain_speed)
 
 
@@ -29,6 +29,8 @@ def main() -> int:
     replay_latency.main()
     print()
     render_speed.main()
+    print()
+    contexter_speed.main()
     return 0
 
 
