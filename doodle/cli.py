@@ -253,7 +253,12 @@ def cmd_stylize(args) -> int:
         found = Stages(*ends, motion.frames)
     else:
         found = stages(motion)
-    out = stylize(motion, found, args.time, args.weight)
+    if args.cyclic:
+        from retarget.stylize import cyclic
+
+        out = cyclic(motion, args.weight)
+    else:
+        out = stylize(motion, found, args.time, args.weight)
     Path(args.output).parent.mkdir(parents=True, exist_ok=True)
     write_bvh(args.output, out, unit=unit)
     print(f"{args.output}: {out.frames} frames at {out.fps:.4g} fps ({out.duration:.2f} s; neutral "
@@ -460,6 +465,8 @@ def build_parser() -> argparse.ArgumentParser:
                    "follow-through (default: extracted)")
     p.add_argument("-o", "--output", required=True, metavar="OUT.bvh")
     p.add_argument("--compare", metavar="PNG", help="neutral and stylised side by side, with end-effector paths")
+    p.add_argument("--cyclic", action="store_true",
+                   help="a cycle (a walk): Weight as upper-body swing and posture only, no retiming; Time ignored")
     p.set_defaults(run=cmd_stylize)
 
     p = sub.add_parser("library", help="action libraries: list, show, check, sheet, import")

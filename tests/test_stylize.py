@@ -229,3 +229,12 @@ def test_weight_on_a_walk_cycle_keeps_the_loop_and_the_feet():
         assert loop < np.abs(m.rotations[-1] - m.rotations[0]).max() + 1e-3  # closes as well as the clip did
         for k, f in enumerate(feet):
             assert np.abs(world[contact[:, k], f, 1] - before[contact[:, k], f, 1]).max() < 0.01
+
+
+def test_stylize_command_on_a_cycle(tmp_path):
+    clip = Path(__file__).resolve().parents[1] / "library" / "builtin" / "clips" / "walk.bvh"
+    out = tmp_path / "w.bvh"
+    assert main(["stylize", str(clip), "--weight", "1", "--cyclic", "-o", str(out)]) == 0
+    neutral, styled = read_bvh(clip, unit=1.0), read_bvh(out, unit=1.0)
+    assert styled.frames == neutral.frames and styled.frame_time == pytest.approx(neutral.frame_time)
+    assert not np.allclose(styled.rotations, neutral.rotations)
