@@ -102,6 +102,10 @@ def compile_doodle(doodle: Doodle, library_dir=None, use_builtin: bool = True, p
     scale = CHARACTER_HEIGHT / PROP_SIZE if scale is None else scale
     results = []
     recognised = recognize(doodle, actions, params, threshold)
+    met = meet(doodle, recognised, scale)
+    if met is not doodle:  # characters brought within reach: read the scene again
+        doodle = met
+        recognised = recognize(doodle, actions, params, threshold)
     duration = float(doodle.t[-1])
     times = np.arange(int(np.floor(duration * fps)) + 1) / fps
     skeleton, rest = _compile_skeleton(library, user, clips)
@@ -174,7 +178,78 @@ def compile_doodle(doodle: Doodle, library_dir=None, use_builtin: bool = True, p
         projected[:, 1] = 0.0 if terrain is None else terrain.height(projected[:, [0, 2]])
         results.append(Animation(track.name, motion, segments, tokens, frame_path, transitions, used, rest.roles,
                                 terrain, ranges, projected, styles, efforts))
+    _contacts(results, recognised)
     return results
+
+
+MEET_DISTANCE = 0.6  # m between two interacting characters' roots: within a hand's reach (§6.2.2)
+HEAD_RADIUS = 0.09  # m: the hand meets the head's surface, not its centre
+MEET_S = 0.8  # s: the receiver steps in over this long before the interaction
+
+
+def _interaction_pairs(recognised: dict) -> list[tuple[str, object, str, object]]:
+    """(track of role 0, its segment, track of role 1, its segment) of each recognised
+    two-character interaction."""
+    firsts = [(tr, s) for tr, (_, segs) in recognised.items() for s in segs if getattr(s, "role", None) == 0]
+    seconds = [(tr, s) for tr, (_, segs) in recognised.items() for s in segs if getattr(s, "role", None) == 1]
+    pairs = []
+    for ta, a in firsts:
+        for tb, b in seconds:
+            if tb != ta and b.interaction == a.interaction and b.start < a.end and a.start < b.end:
+                pairs.append((ta, a, tb, b))
+                break
+    return pairs
+
+
+def meet(doodle: Doodle, recognised: dict, scale: float) -> Doodle:
+    """Interaction placement (§6.2.2, simplified): for each recognised two-character
+    interaction whose characters stand farther apart than a hand's reach, the second
+    character (role 1) steps towards the first over the :data:`MEET_S` before its role
+    begins (a minimum-jerk move in the doodle, read back as an implicit walk where there is
+    time for one) and stays at :data:`MEET_DISTANCE` from it."""
+    from dataclasses import replace as _replace
+
+    from doodle.synth import min_jerk
+
+    tracks = {tr.name: tr for tr in doodle.tracks}
+    changed = False
+    for ta, a, tb, b in _interaction_pairs(recognised):
+        A, B = tracks[ta], tracks[tb]
+        i = min(b.start, len(B.t) - 1)
+        j = int(np.argmin(np.abs(A.t - B.t[i])))
+        gap = (A.p[j] - B.p[i]) * np.array([1.0, 0.0, 1.0])
+        far, want = float(np.linalg.norm(gap)), MEET_DISTANCE / scale
+        if far <= want:
+            continue
+        shift = gap / far * (far - want)
+        u = np.clip((B.t - (B.t[i] - MEET_S)) / MEET_S, 0.0, 1.0) if i > 0 else np.ones(len(B.t))
+        tracks[tb] = _replace(B, p=B.p + min_jerk(u)[:, None] * shift)
+        changed = True
+    return _replace(doodle, tracks=tuple(tracks[tr.name] for tr in doodle.tracks)) if changed else doodle
+
+
+def _contacts(results: list, recognised: dict) -> None:
+    """Each recognised interaction's role-0 character reaches the other's head with its
+    right hand 60 % into its segment (about the end of its execution; retarget.contact),
+    where it can: the hand meets the head's surface on its side."""
+    from retarget.analysis import guess_roles
+    from retarget.contact import reach
+    from retarget.skeleton import forward_kinematics
+
+    by_track = {r.track: k for k, r in enumerate(results)}
+    for ta, a, tb, b in _interaction_pairs(recognised):
+        ra, rb = results[by_track[ta]], results[by_track[tb]]
+        index = next((k for k, s in enumerate(ra.segments) if s is a or (s.first, s.action) == (a.first, a.action)),
+                     None)
+        head = guess_roles(rb.motion.skeleton).get("head")
+        if index is None or head is None or not ra.frame_ranges:
+            continue
+        f0, f1 = ra.frame_ranges[index]
+        frame = f0 + int(round(0.6 * (f1 - f0)))
+        centre = forward_kinematics(rb.motion)[0][frame, head]
+        hand = forward_kinematics(ra.motion)[0][frame, guess_roles(ra.motion.skeleton)["right_hand"]]
+        towards = (hand - centre) / max(float(np.linalg.norm(hand - centre)), 1e-9)
+        object.__setattr__(ra, "motion", reach(ra.motion, centre + HEAD_RADIUS * towards, frame))
 
 
 def gesture_timing(track, span) -> tuple[np.ndarray, np.ndarray] | None:

@@ -251,6 +251,23 @@ def test_builtin_slap_is_recognised_only_as_an_interaction():
     assert "Slap" not in BUILTIN.library.names and "Slap" in BUILTIN.roles.library.names
 
 
+def test_the_slapping_hand_meets_the_head():
+    """Placement and contact (§6.2.2): the characters are brought within reach, and at the
+    contact frame the slapper's right hand is on the slapped character's head (its surface,
+    within 2 cm)."""
+    from doodle.pipeline import HEAD_RADIUS, compile_doodle
+    from retarget.analysis import guess_roles
+    from retarget.skeleton import forward_kinematics
+
+    a, b = compile_doodle(scene(["T_N_Z", "T_Z"], [], 0.3))
+    k = next(k for k, s in enumerate(a.segments) if getattr(s, "interaction", None) == "Slap")
+    f0, f1 = a.frame_ranges[k]
+    frame = f0 + int(round(0.6 * (f1 - f0)))
+    hand = forward_kinematics(a.motion)[0][frame, guess_roles(a.motion.skeleton)["right_hand"]]
+    head = forward_kinematics(b.motion)[0][frame, guess_roles(b.motion.skeleton)["head"]]
+    assert abs(np.linalg.norm(hand - head) - HEAD_RADIUS) < 0.02
+
+
 def test_a_two_character_slap_scene_compiles_with_the_interaction(tmp_path, capsys):
     """Colombine and Pierrot: one BVH per character on one timeline, the slap played by the
     Slap and Slapped clips, the interaction in report.json and in `doodle recognize`."""
@@ -258,6 +275,7 @@ def test_a_two_character_slap_scene_compiles_with_the_interaction(tmp_path, caps
 
     from doodle.cli import main
     from doodle.fileformat import write_doodle
+    from doodle.pipeline import MEET_DISTANCE
 
     path = tmp_path / "slap.doodle"
     write_doodle(path, scene(["T_N_Z", "T_Z"], [], 0.3))
@@ -273,7 +291,7 @@ def test_a_two_character_slap_scene_compiles_with_the_interaction(tmp_path, caps
 
     roots = [read_bvh(out / f"{tr}.bvh", unit=1.0).translations[0, 0] for tr in ("c0", "c1")]
     gap = np.linalg.norm((roots[1] - roots[0])[[0, 2]])
-    assert gap == pytest.approx(0.3 * 8.5, rel=0.15)  # the scene's places kept (prop 0.3 m × 8.5)
+    assert gap == pytest.approx(MEET_DISTANCE, abs=0.01)  # 0.3 m of prop (2.5 m) brought within reach
     capsys.readouterr()
     assert main(["recognize", str(path)]) == 0
     assert "Slap [Slap, role 0]" in capsys.readouterr().out
