@@ -178,7 +178,7 @@ def compile_doodle(doodle: Doodle, library_dir=None, use_builtin: bool = True, p
         projected[:, 1] = 0.0 if terrain is None else terrain.height(projected[:, [0, 2]])
         results.append(Animation(track.name, motion, segments, tokens, frame_path, transitions, used, rest.roles,
                                 terrain, ranges, projected, styles, efforts))
-    _contacts(results, recognised)
+    _contacts(results, recognised, {i.name: i for i in library.interactions})
     return results
 
 
@@ -228,28 +228,34 @@ def meet(doodle: Doodle, recognised: dict, scale: float) -> Doodle:
     return _replace(doodle, tracks=tuple(tracks[tr.name] for tr in doodle.tracks)) if changed else doodle
 
 
-def _contacts(results: list, recognised: dict) -> None:
-    """Each recognised interaction's role-0 character reaches the other's head with its
-    right hand 60 % into its segment (about the end of its execution; retarget.contact),
-    where it can: the hand meets the head's surface on its side."""
+def _contacts(results: list, recognised: dict, interactions: dict) -> None:
+    """For each recognised interaction with a ``contact`` (e.g. the slapper's right hand and
+    the other's head), role 0's hand reaches role 1's joint 60 % into its segment (about
+    the end of its execution; retarget.contact), where it can — a head is met on its
+    surface."""
     from retarget.analysis import guess_roles
     from retarget.contact import reach
     from retarget.skeleton import forward_kinematics
 
     by_track = {r.track: k for k, r in enumerate(results)}
     for ta, a, tb, b in _interaction_pairs(recognised):
+        contact = interactions.get(a.interaction).contact if a.interaction in interactions else ()
+        if not contact or not contact[0].endswith("_hand"):
+            continue
         ra, rb = results[by_track[ta]], results[by_track[tb]]
         index = next((k for k, s in enumerate(ra.segments) if s is a or (s.first, s.action) == (a.first, a.action)),
                      None)
-        head = guess_roles(rb.motion.skeleton).get("head")
+        head = guess_roles(rb.motion.skeleton).get(contact[1])
         if index is None or head is None or not ra.frame_ranges:
             continue
         f0, f1 = ra.frame_ranges[index]
         frame = f0 + int(round(0.6 * (f1 - f0)))
         centre = forward_kinematics(rb.motion)[0][frame, head]
-        hand = forward_kinematics(ra.motion)[0][frame, guess_roles(ra.motion.skeleton)["right_hand"]]
+        hand = forward_kinematics(ra.motion)[0][frame, guess_roles(ra.motion.skeleton)[contact[0]]]
         towards = (hand - centre) / max(float(np.linalg.norm(hand - centre)), 1e-9)
-        object.__setattr__(ra, "motion", reach(ra.motion, centre + HEAD_RADIUS * towards, frame))
+        surface = HEAD_RADIUS if contact[1] == "head" else 0.0
+        side = contact[0].split("_")[0]
+        object.__setattr__(ra, "motion", reach(ra.motion, centre + surface * towards, frame, side))
 
 
 def gesture_timing(track, span) -> tuple[np.ndarray, np.ndarray] | None:

@@ -78,6 +78,7 @@ class Interaction:
     name: str
     actions: tuple[str, ...]
     constraints: tuple[str, ...] = ()  # in the thesis's notation, e.g. "D(0, 1, Personal)" (§6.3)
+    contact: tuple[str, ...] = ()  # (role 0's joint role, role 1's joint role) that meet, e.g. right_hand, head
 
 
 @dataclass(frozen=True)
@@ -153,7 +154,7 @@ def _interaction(entry, i: int, path: Path, names: set) -> Interaction:
     acts = entry.get("actions")
     if not isinstance(acts, list) or len(acts) < 2 or not all(isinstance(a, str) for a in acts):
         raise DoodleError(f"{where}: field 'actions' must list at least two action names")
-    extra = set(entry) - {"name", "actions", "note", "constraints"}
+    extra = set(entry) - {"name", "actions", "note", "constraints", "contact"}
     if extra:
         raise DoodleError(f"{where}: unknown field {sorted(extra)[0]!r}")
     constraints = entry.get("constraints", [])
@@ -165,7 +166,11 @@ def _interaction(entry, i: int, path: Path, names: set) -> Interaction:
         parse_constraints(constraints, entry["name"], len(acts))
     except DoodleError as e:
         raise DoodleError(f"{path}: {e}") from None
-    return Interaction(entry["name"], tuple(acts), tuple(constraints))
+    contact = entry.get("contact", [])
+    if not isinstance(contact, list) or (contact and (len(contact) != 2 or not all(c in ROLES for c in contact))):
+        raise DoodleError(f"{where}: field 'contact' must be two joint roles (role 0's, role 1's) among "
+                          f"{', '.join(ROLES)}, e.g. [\"right_hand\", \"head\"]")
+    return Interaction(entry["name"], tuple(acts), tuple(constraints), tuple(contact))
 
 
 def _action(entry, i: int, path: Path) -> ActionDef:
@@ -278,5 +283,7 @@ def format_library(library: Library, folder) -> str:
                   "actions = [" + ", ".join(_toml_string(x) for x in i.actions) + "]"]
         if i.constraints:
             lines.append("constraints = [" + ", ".join(_toml_string(c) for c in i.constraints) + "]")
+        if i.contact:
+            lines.append("contact = [" + ", ".join(_toml_string(c) for c in i.contact) + "]")
         lines.append("")
     return "\n".join(lines)

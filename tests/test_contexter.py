@@ -129,6 +129,7 @@ def test_builtin_interactions_carry_the_thesis_constraints():
     inter = {i.name: i for i in builtin().interactions}
     assert inter["Slap"].constraints == ("D(0, 1, Personal)", "V(0, 1, 0.5)", "V(1, 0, 0.5)")
     assert inter["Kiss"].constraints == ("D(0, 1, Intimate)", "V(0, 1, 0.5)", "V(1, 0, 0.5)")
+    assert inter["Slap"].contact == ("right_hand", "head") and inter["Kiss"].contact == ()
 
 
 def _manifest(tmp_path, constraints):
