@@ -142,6 +142,13 @@ def test_two_tracks_learn_an_expression_pair(tmp_path, capsys):
     assert all(a.tolerance >= 2 for a in library.actions)
     out = capsys.readouterr().out
     assert "overlap" in out
+    import json
+
+    assert main(["recognize", "--library", str(lib), "--no-builtin", "--convention", "unity", "--json",
+                 files[4]]) == 0  # a held-out performance, both controllers: the pair, as one interaction
+    segs = json.loads(capsys.readouterr().out)["segments"]
+    assert {(s["track"], s["action"], s["interaction"]) for s in segs if s["interaction"]} == \
+        {("c0", "Golf.c0", "Golf"), ("c1", "Golf.c1", "Golf")}
 
 
 def test_learn_command_bad_input(tmp_path, capsys):
