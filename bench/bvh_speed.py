@@ -15,27 +15,18 @@ bvhio's write does not fsync.
 from __future__ import annotations
 
 import tempfile
-import time
 from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 
+from bench.timing import best_of
 from retarget.bvh import read_bvh, read_bvh_with_unit, write_bvh
 
 MOCAP = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "mocap"
 CLIP = MOCAP / "bandai" / "dataset-1" / "dataset-1_walk_normal_001.bvh"
 REPEAT = 20
 RUNS = 3
-
-
-def best_of(fn, runs: int = RUNS) -> float:
-    best = float("inf")
-    for _ in range(runs):
-        start = time.perf_counter()
-        fn()
-        best = min(best, time.perf_counter() - start)
-    return best
 
 
 def _ms(seconds: float) -> str:

@@ -3,8 +3,7 @@ the doodle, beside the per-track recognition it runs after (Segmenter + Matcher,
 
 import time
 
-import numpy as np
-
+from bench.timing import best_of
 from doodle.pipeline import load_actions, recognize
 from doodle.synth import stroke, synth_doodle
 from grammar.contexter import with_interactions
@@ -34,11 +33,8 @@ def main() -> None:
         start = time.perf_counter()
         recognised = recognize(doodle, compiled, interactions=False)
         base = time.perf_counter() - start
-        best = float("inf")
-        for _ in range(3):
-            start = time.perf_counter()
-            result = with_interactions(doodle, compiled, recognised)
-            best = min(best, time.perf_counter() - start)
+        best = best_of(lambda: with_interactions(doodle, compiled, recognised))
+        result = with_interactions(doodle, compiled, recognised)
         frames = len(doodle.t)
         found = sum(1 for segs in result.values() for s in segs if getattr(s, "interaction", None)) // 2
         print(f"  {tracks} tracks, {doodle.t[-1]:.0f} s ({frames} frames): {found} interactions; "

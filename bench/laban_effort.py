@@ -10,6 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
+from bench.timing import best_of
 from laban.classify import bayes_drive, quality
 from laban.features import summary
 from laban.models import load
@@ -24,8 +25,8 @@ def main() -> None:
     c = next(c for c in curves if len(c.t) >= 270)
     seg = 270  # a 3 s segment at 90 Hz
     t, p, q = c.t[:seg], c.p[:seg], c.q[:seg]
-    hmm = _best(lambda: quality(model, t, p, q))
-    nb = _best(lambda: bayes_drive(model, summary(t, p, q)[None]))
+    hmm = best_of(lambda: quality(model, t, p, q), 20, warm=True)
+    nb = best_of(lambda: bayes_drive(model, summary(t, p, q)[None]), 20, warm=True)
     print(f"Laban effort: classifying one {t[-1] - t[0]:.1f} s segment ({seg} samples)")
     print(f"  Drive HMM (features + 8 models)  {hmm * 1000:6.2f} ms   (target ≤ 5 ms)")
     print(f"  baseline: Naive Bayes            {nb * 1000:6.2f} ms")
@@ -77,16 +78,6 @@ def _real(model) -> None:
         chance = share**2 + (1 - share) ** 2
         print(f"  {name:<24} agreement {np.mean(pairs):.3f}   (chance with the same shares {chance:.3f}; "
               f"{share:.0%} {'Sudden' if key == 'p_sudden' else 'Strong'})")
-
-
-def _best(fn, repeats: int = 20) -> float:
-    fn()
-    best = float("inf")
-    for _ in range(repeats):
-        start = time.perf_counter()
-        fn()
-        best = min(best, time.perf_counter() - start)
-    return best
 
 
 if __name__ == "__main__":

@@ -19,7 +19,7 @@ import numpy as np
 
 from doodle.csvimport import read_csv
 from doodle.model import Track
-from grammar.learn import _automaton, _dtw_path, _run, learn, token_string
+from grammar.learn import _automaton, _dtw_cost, _run, learn, token_string
 
 CAP = 40.0  # edit distances are exact up to this
 
@@ -42,11 +42,6 @@ def directions(d, tracks, points=32):
         v = np.diff(r, axis=0)
         cols.append(v / np.maximum(np.linalg.norm(v, axis=1, keepdims=True), 1e-9))
     return np.hstack(cols)
-
-
-def dtw(a, b) -> float:
-    i, j = _dtw_path(a, b)
-    return float(((a[i] - b[j]) ** 2).sum())
 
 
 def main() -> None:
@@ -98,7 +93,7 @@ def main() -> None:
                     times["ours"].append(time.perf_counter() - start)
                     start = time.perf_counter()
                     x = directions(d, tracks)
-                    base = min(templates, key=lambda tpl: dtw(x, tpl[1]))[0]
+                    base = min(templates, key=lambda tpl: _dtw_cost(x, tpl[1]))[0]
                     times["dtw"].append(time.perf_counter() - start)
                     right["ours"] += guess == truth
                     right["dtw"] += base == truth
@@ -128,7 +123,7 @@ def main() -> None:
                 for d in exs[3:5]:
                     right += classes[int(np.argmin(ours(models, d, tracks)))] == truth
                     x = directions(d, tracks)
-                    base += min(templates, key=lambda tpl: dtw(x, tpl[1]))[0] == truth
+                    base += min(templates, key=lambda tpl: _dtw_cost(x, tpl[1]))[0] == truth
                     n += 1
         print(f"  user-independent, {'+'.join(tracks):<6} accuracy {right / n:.3f} over {n} (learned from the other "
               f"{len(users) - 1} users' 3 examples each; DTW baseline {base / n:.3f})")
@@ -154,7 +149,6 @@ def _continuous(data, users, classes, learned, pause=1.0, seed=0) -> None:
     order, each translated to start where the previous ended, joined by a still pause with
     tracking noise and a 0.4 s move; recognised by the Matcher with the learned actions."""
     from doodle.segmenter import tokenize
-    from grammar.learn import MIN_TOLERANCE  # noqa: F401  (documented floor of learned tolerances)
     from grammar.matcher import match
     from grammar.library import compile_library
     from library.manifest import ActionDef, Library

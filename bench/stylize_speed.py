@@ -1,11 +1,10 @@
 """Stylising a 10 s clip (target ≤ 20 ms): the built-in Punch repeated to 10 s at 30 fps,
 Time then Weight, beside the floor of one forward-kinematics pass over the same clip."""
 
-import time
-
 import numpy as np
 from dataclasses import replace
 
+from bench.timing import best_of
 from library.manifest import builtin
 from retarget.analysis import Stages
 from retarget.clips import load_clips
@@ -22,15 +21,9 @@ def main() -> None:
                 long.frames)
     print(f"Stylisation of a {long.duration:.1f} s clip ({long.frames} frames, {len(long.skeleton)} joints)")
     for lt, lw, label in ((1.0, 0.0, "Time (sudden)"), (0.0, 1.0, "Weight (strong)"), (0.5, -0.5, "Time + Weight")):
-        best = min(_timed(lambda: stylize(long, st, lt, lw)) for _ in range(3))
+        best = best_of(lambda: stylize(long, st, lt, lw))
         print(f"  {label:<16} {best * 1000:7.1f} ms   (target ≤ 20 ms)")
-    print(f"  floor, one FK pass {min(_timed(lambda: forward_kinematics(long)) for _ in range(3)) * 1000:7.1f} ms")
-
-
-def _timed(fn) -> float:
-    start = time.perf_counter()
-    fn()
-    return time.perf_counter() - start
+    print(f"  floor, one FK pass {best_of(lambda: forward_kinematics(long)) * 1000:7.1f} ms")
 
 
 if __name__ == "__main__":

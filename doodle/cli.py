@@ -172,7 +172,7 @@ def cmd_compile(args) -> int:
         effort_model = load_effort_model(args.effort_model)
     results = compile_doodle(doodle, args.library, not args.no_builtin, params, args.fps, args.scale, args.threshold,
                              not args.no_foot_pinning, terrain, args.jump_arc, args.retime, qualities, args.style,
-                             effort_model, _progress_bar("segments"))
+                             effort_model, progress_bar("segments"))
     out = Path(args.output)
     out.mkdir(parents=True, exist_ok=True)
     seconds = _seconds(doodle)
@@ -212,17 +212,19 @@ def cmd_compile(args) -> int:
     return 0
 
 
-def _progress_bar(stage: str):
-    """A progress callback drawing a bar on stderr when it is a terminal (else None)."""
+def show_progress(stage: str, i: int, n: int) -> None:
+    """Draw (or redraw) the progress bar of ``stage`` on stderr: ``i`` of ``n`` done."""
+    done = int(24 * i / max(n, 1))
+    print(f"\r  {stage:<14} [{'#' * done}{'.' * (24 - done)}] {i}/{n}", end="" if i < n else "\n",
+          file=sys.stderr, flush=True)
+
+
+def progress_bar(stage: str | None = None):
+    """A progress callback for long work when stderr is a terminal, else None: ``(i, n)``
+    for one ``stage``, or ``(stage, i, n)`` without one."""
     if not sys.stderr.isatty():
         return None
-
-    def show(i: int, n: int) -> None:
-        done = int(24 * i / max(n, 1))
-        print(f"\r  {stage:<10} [{'#' * done}{'.' * (24 - done)}] {i}/{n}", end="" if i < n else "\n",
-              file=sys.stderr, flush=True)
-
-    return show
+    return show_progress if stage is None else (lambda i, n: show_progress(stage, i, n))
 
 
 def _effort_entry(effort) -> dict | None:

@@ -58,16 +58,6 @@ def add_parser(sub) -> None:
     q.set_defaults(run=cmd_record)
 
 
-def _progress(stage: str, i: int, n: int) -> None:
-    """A progress bar on a terminal; one line per finished stage otherwise."""
-    if sys.stderr.isatty():
-        done = int(24 * i / max(n, 1))
-        print(f"\r  {stage:<14} [{'#' * done}{'.' * (24 - done)}] {i}/{n}", end="" if i < n else "\n",
-              file=sys.stderr, flush=True)
-    elif i == n:
-        print(f"  {stage}: {n} done", file=sys.stderr, flush=True)
-
-
 def _drive_name(value: str, where: str) -> str:
     from laban.efforts import DRIVES
 
@@ -107,13 +97,8 @@ def labelled(items, track: str = "c0") -> list:
     return curves
 
 
-def _model(path):
-    from laban.models import load
-
-    return load(path)
-
-
 def cmd_train(args) -> int:
+    from doodle.cli import progress_bar
     from laban.models import save
     from laban.train import DEFAULT_DATA, generated, train
 
@@ -133,7 +118,7 @@ def cmd_train(args) -> int:
         raise DoodleError("nothing to train on: give labelled doodle files or --synthetic")
     info = {"files": [str(f) for f in args.files], "synthetic": DEFAULT_DATA if args.synthetic else None}
     try:
-        model = train(curves, held or None, sets=sets, augment=args.augment, progress=_progress, info=info)
+        model = train(curves, held or None, sets=sets, augment=args.augment, progress=progress_bar(), info=info)
     except ValueError as e:
         raise DoodleError(str(e)) from None
     save(model, args.output)
@@ -143,11 +128,12 @@ def cmd_train(args) -> int:
 
 
 def cmd_eval(args) -> int:
+    from laban.models import load as load_model
     from laban.efforts import DRIVES, STATES
     from laban.report import confusion_png
     from laban.train import evaluate, generated
 
-    model = _model(args.model)
+    model = load_model(args.model)
     if args.people < 1:
         raise DoodleError(f"--people must be 1 or more, not {args.people}")
     curves = labelled(args.files, args.track) if args.files else generated("test", people=args.people)
@@ -177,11 +163,12 @@ def cmd_eval(args) -> int:
 
 
 def cmd_classify(args) -> int:
+    from laban.models import load as load_model
     from doodle.loader import load
     from doodle.pipeline import effort_quality, load_actions, recognize
     from doodle.segmenter import SegmenterParams
 
-    model = _model(args.model)
+    model = load_model(args.model)
     compiled = None if args.whole else load_actions(None, True)
     failed = 0
     for path in args.files:

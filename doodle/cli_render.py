@@ -8,7 +8,6 @@ spread over the clip, played so the clip keeps its length).
 
 from __future__ import annotations
 
-import sys
 import time
 from pathlib import Path
 
@@ -45,14 +44,6 @@ def parse_size(text: str) -> tuple[int, int]:
     return size
 
 
-def _progress(i: int, n: int) -> None:
-    """A progress bar on stderr when it is a terminal."""
-    if sys.stderr.isatty():
-        done = int(24 * i / max(n, 1))
-        print(f"\r  rendering [{'#' * done}{'.' * (24 - done)}] {i}/{n}", end="" if i < n else "\n",
-              file=sys.stderr, flush=True)
-
-
 def _label(results, frame: int, fps: float) -> str:
     """Time and the action each track performs at an output frame."""
     doing = []
@@ -64,6 +55,7 @@ def _label(results, frame: int, fps: float) -> str:
 
 def cmd_render(args) -> int:
     from doodle import render
+    from doodle.cli import progress_bar
 
     out = Path(args.output)
     suffix = out.suffix.lower()
@@ -87,7 +79,7 @@ def cmd_render(args) -> int:
     results = compile_doodle(doodle, args.library, fps=args.fps, terrain=terrain, effort_model=load_effort_model(None))
     count = args.frames if args.frames is not None else (SHEET_FRAMES if suffix == ".png" else None)
     picks = render.frame_indices(results, frames=count)
-    frames = render.render_frames(results, terrain, size, frames=count, progress=_progress)
+    frames = render.render_frames(results, terrain, size, frames=count, progress=progress_bar("rendering"))
     try:
         out.parent.mkdir(parents=True, exist_ok=True)
     except OSError as e:

@@ -6,7 +6,7 @@ one animation per track (:func:`compile_doodle`), with quality metrics (:func:`q
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -207,8 +207,6 @@ def meet(doodle: Doodle, recognised: dict, scale: float) -> Doodle:
     character (role 1) steps towards the first over the :data:`MEET_S` before its role
     begins (a minimum-jerk move in the doodle, read back as an implicit walk where there is
     time for one) and stays at :data:`MEET_DISTANCE` from it."""
-    from dataclasses import replace as _replace
-
     from doodle.synth import min_jerk
 
     tracks = {tr.name: tr for tr in doodle.tracks}
@@ -223,9 +221,9 @@ def meet(doodle: Doodle, recognised: dict, scale: float) -> Doodle:
             continue
         shift = gap / far * (far - want)
         u = np.clip((B.t - (B.t[i] - MEET_S)) / MEET_S, 0.0, 1.0) if i > 0 else np.ones(len(B.t))
-        tracks[tb] = _replace(B, p=B.p + min_jerk(u)[:, None] * shift)
+        tracks[tb] = replace(B, p=B.p + min_jerk(u)[:, None] * shift)
         changed = True
-    return _replace(doodle, tracks=tuple(tracks[tr.name] for tr in doodle.tracks)) if changed else doodle
+    return replace(doodle, tracks=tuple(tracks[tr.name] for tr in doodle.tracks)) if changed else doodle
 
 
 def _contacts(results: list, recognised: dict, interactions: dict) -> None:
@@ -255,7 +253,7 @@ def _contacts(results: list, recognised: dict, interactions: dict) -> None:
         towards = (hand - centre) / max(float(np.linalg.norm(hand - centre)), 1e-9)
         surface = HEAD_RADIUS if contact[1] == "head" else 0.0
         side = contact[0].split("_")[0]
-        object.__setattr__(ra, "motion", reach(ra.motion, centre + surface * towards, frame, side))
+        results[by_track[ta]] = replace(ra, motion=reach(ra.motion, centre + surface * towards, frame, side))
 
 
 def gesture_timing(track, span) -> tuple[np.ndarray, np.ndarray] | None:
@@ -296,16 +294,14 @@ def _stylized(clip, lt: float, lw: float, style: str = "modifiers", cycle: bool 
     """The clip with Time then Weight applied, its stages moved with it (``style``
     "preferred": motion scale and reshaping only, the timing left to the gesture; a
     ``cycle`` gets Weight's swing and posture only)."""
-    from dataclasses import replace as _replace
-
     from retarget.stylize import cyclic, preferred, stylize_staged
 
     if cycle:
-        return _replace(clip, motion=cyclic(clip.motion, lw))
+        return replace(clip, motion=cyclic(clip.motion, lw))
     if style == "preferred":
-        return _replace(clip, motion=preferred(clip.motion, clip.stages, lt, lw))
+        return replace(clip, motion=preferred(clip.motion, clip.stages, lt, lw))
     motion, stages = stylize_staged(clip.motion, clip.stages, lt, lw)
-    return _replace(clip, motion=motion, stages=stages)
+    return replace(clip, motion=motion, stages=stages)
 
 
 def read_edits(path) -> dict:
@@ -349,8 +345,6 @@ def read_edits(path) -> dict:
 
 def _transition_points(pieces: list, clips: list) -> list:
     """Clip ranges between transition points (§5.3.1) for neighbouring one-shot clips."""
-    from dataclasses import replace as _replace
-
     from retarget.transitions import transition_point
 
     pieces = list(pieces)
@@ -362,9 +356,9 @@ def _transition_points(pieces: list, clips: list) -> list:
         i, j = transition_point(a.motion, b.motion, clips[k].stages, clips[k + 1].stages, a.pelvis, b.pelvis)
         start = a.clip_in / a.motion.frame_time
         if one_shot_a and i - start >= 2:
-            pieces[k] = _replace(a, clip_out=i * a.motion.frame_time)
+            pieces[k] = replace(a, clip_out=i * a.motion.frame_time)
         if one_shot_b and b.motion.frames - 1 - j >= 2:
-            pieces[k + 1] = _replace(b, clip_in=j * b.motion.frame_time)
+            pieces[k + 1] = replace(b, clip_in=j * b.motion.frame_time)
     return pieces
 
 
@@ -372,8 +366,6 @@ def _compile_skeleton(library, user, clips):
     """The skeleton of the output (the user library's clips' when it has any, else the
     built-in humanoid) and a rest-pose clip on it, played for actions that have no clip
     on that skeleton (held first frame of its Idle, or of its first clip)."""
-    from dataclasses import replace as _replace
-
     from retarget.analysis import Stages
 
     mine = [c for a in (user.actions if user else ()) for c in clips.get(a.name, [])]
@@ -386,9 +378,9 @@ def _compile_skeleton(library, user, clips):
     if base.action == "Idle":
         return skeleton, base
     still = base.motion.slice(0, 1)
-    still = _replace(still, translations=np.repeat(still.translations, 2, axis=0),
+    still = replace(still, translations=np.repeat(still.translations, 2, axis=0),
                      rotations=np.repeat(still.rotations, 2, axis=0))
-    rest = _replace(base, motion=still, stages=Stages(0, 0, 1, 1, 2), cycle_length=None,
+    rest = replace(base, motion=still, stages=Stages(0, 0, 1, 1, 2), cycle_length=None,
                     contacts=np.ones((2, 2), dtype=bool))
     return skeleton, rest
 

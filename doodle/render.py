@@ -23,14 +23,13 @@ install.
 
 from __future__ import annotations
 
-import contextlib
 import os
-import tempfile
 from pathlib import Path
 
 import numpy as np
 
 from doodle.errors import DoodleError
+from doodle.fileformat import atomic_path
 
 INSTALL = "pip install pyrender==0.1.45 imageio-ffmpeg; Debian/Ubuntu: apt-get install libegl1 libgl1-mesa-dri"
 
@@ -381,31 +380,6 @@ def _tube(points: np.ndarray, radius: float, trimesh, sections: int = 6):
 # --- writers -----------------------------------------------------------------------------
 
 
-@contextlib.contextmanager
-def _atomic(path):
-    """Yield a temporary file name beside ``path`` (same suffix) and rename it to ``path``
-    when the block succeeds; on any failure remove it and leave ``path`` as it was."""
-    path = Path(path)
-    try:
-        fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=path.suffix, dir=path.parent)
-    except OSError as e:
-        raise DoodleError(f"{path}: cannot write: {e.strerror or e}") from None
-    os.close(fd)
-    try:
-        yield tmp
-        try:
-            mode = os.stat(path).st_mode & 0o777
-        except OSError:
-            mode = 0o644
-        os.chmod(tmp, mode)
-        os.replace(tmp, path)
-    except OSError as e:
-        raise DoodleError(f"{path}: cannot write: {e.strerror or e}") from None
-    finally:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-
-
 def write_sheet(frames, path, columns: int = 4, labels=None) -> Path:
     """A PNG grid of the frames (``columns`` across), each labelled with ``labels[i]`` if given."""
     from PIL import Image, ImageDraw, ImageFont
@@ -425,7 +399,7 @@ def write_sheet(frames, path, columns: int = 4, labels=None) -> Path:
         sheet.paste(Image.fromarray(tile), (x, y))
         if labels is not None:
             draw.text((x + 6, y + 4), str(labels[i]), fill=(20, 20, 20), font=font)
-    with _atomic(path) as tmp:
+    with atomic_path(path) as tmp:
         sheet.save(tmp, format="PNG")
     return path
 
@@ -435,7 +409,7 @@ def write_gif(frames, path, fps: float = 15.0) -> Path:
     from PIL import Image
 
     path = Path(path)
-    with _atomic(path) as tmp:
+    with atomic_path(path) as tmp:
         images = [Image.fromarray(np.asarray(f, dtype=np.uint8)).quantize(256) for f in frames]
         if not images:
             raise DoodleError(f"{path}: no frames to write")
@@ -451,7 +425,7 @@ def write_mp4(frames, path, fps: float = 30.0) -> Path:
     except ImportError:
         raise DoodleError("writing MP4 needs imageio-ffmpeg: pip install imageio-ffmpeg") from None
     path = Path(path)
-    with _atomic(path) as tmp:
+    with atomic_path(path) as tmp:
         writer, count = None, 0
         try:
             for f in frames:

@@ -76,11 +76,10 @@ def left_to_right(points: int, states: int = STATES) -> tuple[np.ndarray, np.nda
     return start, A
 
 
-def fit(sequences: list[np.ndarray], states: int = STATES, iterations: int = 10, seed: int = 0):
+def fit(sequences: list[np.ndarray], states: int = STATES, iterations: int = 10):
     """One left-to-right HMM on standardised sequences (each (T, d)); returns
     ``(start, transitions, means, variances)``. Means and variances start from a uniform
     split of every sequence in time; then Baum–Welch (:func:`baum_welch`)."""
-    del seed  # deterministic: no random initialisation
     X = np.concatenate(sequences)
     lengths = [len(s) for s in sequences]
     split = np.concatenate([np.minimum((np.arange(n) * states) // n, states - 1) for n in lengths])
@@ -178,7 +177,7 @@ def fit_set(labels: tuple[str, ...], sequences: list[np.ndarray], y: list[str], 
         mine = [(s - centre) / scale for s, lab in zip(sequences, y) if lab == label]
         if not mine:
             raise ValueError(f"no training sequence for {label!r}")
-        parts.append(fit(mine, iterations=iterations, seed=k))
+        parts.append(fit(mine, iterations=iterations))
         if progress:
             progress(k + 1, len(labels))
     start, A, means, variances = (np.stack(p) for p in zip(*parts))

@@ -78,7 +78,7 @@ def train(curves: list[Labelled], held_out: list[Labelled] | None = None, sets=S
     missing = sorted(set(DRIVES) - {c.drive for c in curves})
     if missing:
         raise ValueError(f"no training curve for the Drive(s) {missing}: every Drive needs examples")
-    step = _stages(progress)
+    step = progress or (lambda stage, i, n: None)
     X = np.array([summary(c.t, c.p, c.q) for c in curves])
     groups = np.array([c.group for c in curves])
     bayes = {}
@@ -99,13 +99,6 @@ def train(curves: list[Labelled], held_out: list[Labelled] | None = None, sets=S
                            lambda i, n: step("element HMMs", i, n))
     temperature = calibrate(drive_hmms, held_out, sets, points) if held_out else 1.0
     return EffortModel(bayes, drive_hmms, element_hmms, tuple(sets), points, temperature, threshold, info or {})
-
-
-def _stages(progress):
-    def step(stage, i, n):
-        if progress:
-            progress(stage, i, n)
-    return step
 
 
 def calibrate(hmms: HMMSet, curves: list[Labelled], sets=SETS, points: int = POINTS) -> float:

@@ -11,26 +11,19 @@ Needs matplotlib (Agg backend); files are written to a temporary name and rename
 
 from __future__ import annotations
 
-import os
-import tempfile
 from pathlib import Path
 
 import numpy as np
 
+from doodle.fileformat import atomic_path
 from retarget.sheet import contact_sheet
 from retarget.skeleton import forward_kinematics
 
 
 def atomic_png(path: Path, draw) -> None:
     """Call ``draw(temporary_name)`` and rename the file to ``path`` when it succeeded."""
-    with tempfile.NamedTemporaryFile(suffix=".png", dir=path.parent, delete=False) as tmp:
-        pass
-    try:
-        draw(tmp.name)
-        os.replace(tmp.name, path)
-    finally:
-        if os.path.exists(tmp.name):
-            os.unlink(tmp.name)
+    with atomic_path(path) as tmp:
+        draw(tmp)
 
 
 def plan_view(results, projected: dict, path) -> Path:

@@ -33,7 +33,6 @@ token_strings = st.lists(st.sampled_from(MOVES[:12]), min_size=1, max_size=12).m
 @given(st.lists(token_strings, min_size=2, max_size=5))
 def test_every_example_is_accepted(strings):
     learned = expression_of(strings)
-    assert np.all(distances([learned.expression], s)[0] == 0 for s in strings), learned.expression
     for s in strings:
         assert distances([learned.expression], s)[0] == 0, (s, learned.expression)
 

@@ -3,7 +3,6 @@ what the batch path gives, with latencies, at the pace asked for."""
 
 from pathlib import Path
 
-import numpy as np
 import pytest
 
 from doodle.cli import main
