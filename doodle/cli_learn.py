@@ -74,6 +74,7 @@ def cmd_learn(args) -> int:
     from doodle.fileformat import atomic_write
     from grammar.learn import learn
     from grammar.library import compile_library, overlaps
+    from grammar.shapes import save_paths
     from library.manifest import ActionDef, Interaction, Library, builtin, combine, format_library, load_library, \
         manifest_path
 
@@ -109,15 +110,20 @@ def cmd_learn(args) -> int:
             raise DoodleError(f"track {track}: {e}") from None
     took = time.perf_counter() - start
     source = ", ".join(Path(p).name for p in args.examples)
+    shapes = [folder / "shapes" / f"{n}.npz" for n in names]
     new = [ActionDef(n, lrn.expression, False, True, False, note=f"learned from {source}",
-                     source=str(manifest_path(folder)), tolerance=lrn.tolerance) for n, lrn in zip(names, learned)]
+                     source=str(manifest_path(folder)), tolerance=lrn.tolerance, shape=str(shape.resolve()),
+                     track=track if len(tracks) > 1 else None)
+           for n, lrn, shape, track in zip(names, learned, shapes, tracks)]
     kept = tuple(a for a in existing.actions if a.name not in names)
     interactions = tuple(i for i in existing.interactions if i.name != name)
     if len(names) > 1:
         interactions += (Interaction(name, tuple(names)),)
     library = Library(existing.name, kept + tuple(new), existing.source, existing.roles, interactions)
+    (folder / "shapes").mkdir(parents=True, exist_ok=True)
+    for shape, lrn in zip(shapes, learned):  # first: compiling the library reads them
+        save_paths(shape, lrn.paths)
     compiled = compile_library(combine(None if args.no_builtin else builtin(), library))
-    folder.mkdir(parents=True, exist_ok=True)
     atomic_write(manifest_path(folder), [format_library(library, folder.resolve())])
     for n, lrn, track in zip(names, learned, tracks):
         print(f"{n} ({track}, learned in {took * 1000 / len(tracks):.0f} ms, tolerance {lrn.tolerance:g} edits): "

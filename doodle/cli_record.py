@@ -84,7 +84,7 @@ class _View:
 
 
 def cmd_record(args) -> int:
-    from doodle.pipeline import load_actions
+    from doodle.pipeline import load_actions, track_automata
     from doodle.recorder import record
 
     out = Path(args.output)
@@ -94,7 +94,7 @@ def cmd_record(args) -> int:
         raise DoodleError(f"--seconds must be a positive number, not {args.seconds:g}")
     source = _open_source(args)
     try:
-        automaton = load_actions(args.library, not args.no_builtin).automaton()
+        automaton = track_automata(load_actions(args.library, not args.no_builtin), [n for n, _, _ in source.tracks])
         tracks = ", ".join(f"{n} ({' '.join(x for x in (r, s) if x)})" if r or s else n for n, r, s in source.tracks)
         how = "press the trigger to start and again to stop" if args.trigger else "Ctrl-C to stop"
         print(f"{source.device}: {tracks} at {source.rate:g} Hz; {how}", flush=True)

@@ -23,14 +23,15 @@ def cmd_replay(args) -> int:
     import numpy as np
 
     from doodle.cli import _load, _params
-    from doodle.pipeline import load_actions
+    from doodle.pipeline import load_actions, track_automata
     from doodle.replay import replay
 
     if not (args.speed >= 0 and np.isfinite(args.speed)):
         raise DoodleError(f"--speed must be 0 (flat out) or a positive number, not {args.speed:g}")
     params, mounts = _params(args)
     doodle = _load(args.file, args, mounts)
-    automaton = load_actions(args.library, not args.no_builtin).automaton(args.threshold)
+    compiled = load_actions(args.library, not args.no_builtin)
+    automata = track_automata(compiled, doodle.names, args.threshold)
     pace = "flat out" if not args.speed else f"{args.speed:g}× real time"
     print(f"{args.file}: {len(doodle.tracks)} track(s), {doodle.t[-1]:.2f} s, replayed {pace}", flush=True)
 
@@ -39,7 +40,7 @@ def cmd_replay(args) -> int:
         print(f"  {r.at:8.2f} s  {r.track}  {r.action:<16} {r.start:7.2f}–{r.end:7.2f} s  {how:<12} "
               f"latency {r.latency:.2f} s", flush=True)
 
-    found, costs = replay(doodle, automaton, params, args.speed or None, show)
+    found, costs = replay(doodle, automata, params, args.speed or None, show, shapes=compiled.shapes)
     lat = [r.latency for r in found]
     print(f"{len(found)} action(s); latency after a gesture ends: median {np.median(lat) if lat else 0:.2f} s; "
           f"processing per frame: p50 {np.percentile(costs, 50) * 1e3:.3f} ms, p99 {np.percentile(costs, 99) * 1e3:.3f} ms",

@@ -17,6 +17,7 @@ from doodle.segmenter import SegmenterParams, tokenize_doodle
 from doodle.tokens import Token
 from grammar.library import Compiled, compile_library
 from grammar.matcher import Segment, match
+from grammar.shapes import refine
 from library.manifest import builtin, combine, load_library
 
 
@@ -34,15 +35,30 @@ def recognize(doodle: Doodle, compiled: Compiled, params: SegmenterParams = Segm
     """Per track: its tokens and the action segments recognised in them — with the
     library's interactions between tracks recognised by the Contexter (§6.2.1) where the
     doodle has several tracks (unless ``interactions`` is False)."""
-    automaton = compiled.automaton(threshold, direction_costs)
     tokens = tokenize_doodle(doodle, params)
-    result = {name: (toks, match(toks, automaton, name)) for name, toks in tokens.items()}
+    automata = track_automata(compiled, list(tokens), threshold, direction_costs)
+    result = {}
+    for name, toks in tokens.items():
+        segments = match(toks, automata[name], name)
+        if compiled.shapes is not None:  # learned actions re-decided by their examples' shapes
+            track = doodle.track(name)
+            segments = refine(segments, toks, track.p, track.valid, compiled.shapes, name)
+        result[name] = (toks, segments)
     if interactions and len(result) > 1 and compiled.library.interactions:
         from grammar.contexter import with_interactions
 
         resolved = with_interactions(doodle, compiled, result, threshold)
         result = {name: (toks, resolved[name]) for name, (toks, _) in result.items()}
     return result
+
+
+def track_automata(compiled: Compiled, tracks: list[str], threshold: float = 2.0,
+                   direction_costs: bool = False) -> dict:
+    """The Matcher's tables per track: one shared unless some action is bound to a track."""
+    if not compiled.bound:
+        automaton = compiled.automaton(threshold, direction_costs)
+        return {name: automaton for name in tracks}
+    return {name: compiled.automaton(threshold, direction_costs, name) for name in tracks}
 
 
 # --- compile: actions → animation (first version: flat ground, built-in clips) -------------

@@ -149,10 +149,10 @@ def record(source, path, *, clock=time.monotonic, sleep=time.sleep, wait_for_tri
         raise DoodleError(f"{path}: already exists (pass --overwrite to replace it)")
     if max_seconds is not None and not (max_seconds > 0 and np.isfinite(max_seconds)):
         raise DoodleError(f"recording length must be a positive number of seconds, not {max_seconds!r}")
-    if automaton is None:
-        from doodle.pipeline import load_actions
+    if automaton is None:  # per track (actions may be bound to one); shapes are applied on replay and compile
+        from doodle.pipeline import load_actions, track_automata
 
-        automaton = load_actions(library_dir, use_builtin).automaton()
+        automaton = track_automata(load_actions(library_dir, use_builtin), [name for name, _, _ in source.tracks])
     emit = on_event or (lambda kind, payload: None)
     rate = float(source.rate)
     period = 1.0 / rate
@@ -176,7 +176,8 @@ def record(source, path, *, clock=time.monotonic, sleep=time.sleep, wait_for_tri
                         continue
                     t0 = frame.t
                     writer = DoodleWriter(path, source.tracks, rate, source.device, overwrite=overwrite)
-                    lives = [_Live(name, rate, params, automaton, mount, times, emit) for name, _, _ in source.tracks]
+                    lives = [_Live(name, rate, params, automaton[name] if isinstance(automaton, dict) else automaton,
+                                   mount, times, emit) for name, _, _ in source.tracks]
                     emit("started", {"t": 0.0, "path": str(path), "tracks": [name for name, _, _ in source.tracks]})
                 elif wait_for_trigger and frame.trigger:
                     reason = "trigger"

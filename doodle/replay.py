@@ -31,16 +31,39 @@ class Recognised:
 
 
 def replay(doodle: Doodle, automaton, params: SegmenterParams = SegmenterParams(), speed: float | None = None,
-           on_action=None, clock=time.perf_counter, sleep=time.sleep) -> tuple[list[Recognised], np.ndarray]:
+           on_action=None, clock=time.perf_counter, sleep=time.sleep,
+           shapes=None) -> tuple[list[Recognised], np.ndarray]:
     """Stream ``doodle``; returns what was recognised and the processing time of every
-    frame (all tracks' samples at one time step), in seconds. ``speed`` 1 is real time, 2
-    twice as fast, None as fast as possible; ``on_action(Recognised)`` is called as each
-    action is recognised."""
+    frame (all tracks' samples at one time step), in seconds. ``automaton`` is the
+    Matcher's tables, or a dict of them by track name
+    (:func:`doodle.pipeline.track_automata`); with ``shapes`` (a
+    :class:`grammar.shapes.ShapeSet`) learned actions are re-decided by their shapes as in
+    :func:`doodle.pipeline.recognize`. ``speed`` 1 is real time, 2 twice as fast, None as
+    fast as possible; ``on_action(Recognised)`` is called as each action is recognised."""
     from grammar.matcher import Matcher
+    from grammar.shapes import Refiner
 
     tracks = doodle.tracks
     segmenters = [Segmenter(doodle.rate, params, tr.name, doodle.source) for tr in tracks]
-    matchers = [Matcher(automaton, tr.name) for tr in tracks]
+    matchers = [Matcher(automaton[tr.name] if isinstance(automaton, dict) else automaton, tr.name) for tr in tracks]
+    refiners = [Refiner(shapes, tr.p, tr.valid, tr.name) if shapes is not None else None for tr in tracks]
+
+    def step(k, token):
+        segments = matchers[k].push(token)
+        if refiners[k] is None:
+            return segments
+        refiners[k].tokens.append(token)
+        return refiners[k].push(segments)
+
+    def finish(k):
+        segments = []
+        for token in segmenters[k].close():
+            segments += step(k, token)
+        segments += matchers[k].close()
+        if refiners[k] is None:
+            return segments
+        return refiners[k].push(segments) + refiners[k].close()
+
     found: list[Recognised] = []
     times = tracks[0].t
     costs = np.empty(len(times))
@@ -65,12 +88,9 @@ def replay(doodle: Doodle, automaton, params: SegmenterParams = SegmenterParams(
         tick = time.perf_counter()
         for k, tr in enumerate(tracks):
             for token in segmenters[k].push(now, tr.p[i], tr.q[i], bool(tr.valid[i])):
-                report(k, matchers[k].push(token), now)
+                report(k, step(k, token), now)
         costs[i] = time.perf_counter() - tick
     end = float(times[-1])
     for k in range(len(tracks)):
-        segments = []
-        for token in segmenters[k].close():
-            segments += matchers[k].push(token)
-        report(k, segments + matchers[k].close(), end)
+        report(k, finish(k), end)
     return found, costs

@@ -37,6 +37,7 @@ from doodle import quat
 from doodle.errors import DoodleError
 from doodle.model import Track
 from doodle.segmenter import SegmenterParams, tokenize
+from grammar import shapes
 
 POINTS = 128  # samples per example for the DTW average
 ITERATIONS = 8
@@ -52,6 +53,7 @@ class Learned:
     strings: tuple[tuple[str, ...], ...]  # the examples' token strings, then the average's
     mandatory: frozenset
     tolerance: float | None = None  # edits a new performance may be from the expression
+    paths: np.ndarray | None = None  # the examples' paths resampled by arc length (grammar.shapes)
 
 
 def canonical(t: np.ndarray, p: np.ndarray, q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -238,7 +240,8 @@ def learn(examples: list[tuple[np.ndarray, np.ndarray, np.ndarray]], rate: float
             raise DoodleError(f"example {k + 1} is all still: nothing was performed")
         strings.append(s)
     average = token_string(dba(examples), rate, params)
-    learned = expression_of(strings + ([average] if average else []))
+    learned = replace(expression_of(strings + ([average] if average else [])),
+                      paths=np.array([shapes.resample(p) for _, p, _ in examples]))
     return replace(learned, tolerance=tolerance(learned.strings, len(strings))) if with_tolerance else learned
 
 

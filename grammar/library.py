@@ -8,6 +8,7 @@ from doodle.errors import DoodleError
 from grammar.automata import DFA, check_language, compile_expression, intersection_witness
 from grammar.expr import parse
 from grammar.matcher import Automaton
+from grammar.shapes import ShapeSet, load_paths, shape_set
 from library.manifest import ActionDef, Library
 
 
@@ -16,11 +17,22 @@ class Compiled:
     library: Library
     dfas: tuple[DFA, ...]
     roles: "Compiled | None" = None  # interaction-only actions, matched by the Contexter
+    shapes: ShapeSet | None = None  # the learned actions' example shapes (grammar.shapes)
 
-    def automaton(self, threshold: float = 2.0, direction_costs: bool = False) -> Automaton:
-        return Automaton(self.library.names, list(self.dfas), threshold, direction_costs,
-                         [a.cyclic for a in self.library.actions],
-                         limits=[a.tolerance if a.tolerance is not None else threshold for a in self.library.actions])
+    def automaton(self, threshold: float = 2.0, direction_costs: bool = False, track: str | None = None) -> Automaton:
+        """The Matcher's tables; with ``track``, without the actions bound to other tracks."""
+        keep = [k for k, a in enumerate(self.library.actions) if track is None or a.track in (None, track)]
+        if not keep:
+            raise DoodleError(f"{self.library.source}: no action may be recognised on track {track!r}")
+        actions = [self.library.actions[k] for k in keep]
+        return Automaton([a.name for a in actions], [self.dfas[k] for k in keep], threshold, direction_costs,
+                         [a.cyclic for a in actions],
+                         limits=[a.tolerance if a.tolerance is not None else threshold for a in actions])
+
+    @property
+    def bound(self) -> bool:
+        """Whether some action is bound to a track."""
+        return any(a.track is not None for a in self.library.actions)
 
     def dfa(self, name: str) -> DFA:
         return self.dfas[self.library.names.index(name)]
@@ -52,7 +64,10 @@ def compile_library(library: Library) -> Compiled:
                            library.roles, library.interactions)
     if not recognisable.actions:
         raise DoodleError(f"{library.source}: no action has an expression to recognise")
-    return Compiled(recognisable, tuple(compile_action(a) for a in recognisable.actions), compile_roles(library))
+    named = {a.name: load_paths(a.shape, a.name) for a in recognisable.actions if a.shape}
+    return Compiled(recognisable, tuple(compile_action(a) for a in recognisable.actions), compile_roles(library),
+                    shape_set(named, {a.name: a.expression for a in recognisable.actions},
+                              {a.name: a.track for a in recognisable.actions}))
 
 
 def compile_roles(library: Library) -> Compiled | None:

@@ -18,6 +18,8 @@ A library is a folder holding ``library.toml``::
                                      #   execution and follow-through (else extracted)
     cycle_length = 1.3               # optional, cyclic clips: metres travelled per cycle
     tolerance = 6                    # optional: token edits a performance may differ by (default: the Matcher's 2)
+    shape = "shapes/wave.npz"        # optional: the examples' paths (learned actions; grammar.shapes)
+    track = "c0"                     # optional: the only track it is recognised on
 
     [skeleton]                       # optional: joints playing each role in the clips
     pelvis = "Hips"
@@ -52,7 +54,7 @@ BUILTIN = Path(__file__).resolve().parent / "builtin"
 RESERVED = {"unknown"}
 FLAGS = ("cyclic", "in_place", "jumping")
 ACTION_KEYS = {"name", "expression", "note", "flags_note", "clips", "stages", "cycle_length", "tolerance",
-               "interaction_only", *FLAGS}
+               "interaction_only", "shape", "track", *FLAGS}
 ROLES = ("pelvis", "chest", "head", "left_foot", "right_foot", "left_hand", "right_hand")
 
 
@@ -71,6 +73,8 @@ class ActionDef:
     roles: dict = field(default_factory=dict)  # its library's [skeleton] table: role -> joint name
     tolerance: float | None = None  # edits a performance may be from the expression (None: the Matcher's)
     interaction_only: bool = False  # its expression is a role of an interaction, never matched alone
+    shape: str | None = None  # absolute path of the .npz of its examples' paths (grammar.shapes)
+    track: str | None = None  # recognised on this track only (None: on any)
 
 
 @dataclass(frozen=True)
@@ -209,6 +213,12 @@ def _action(entry, i: int, path: Path) -> ActionDef:
     interaction_only = entry.get("interaction_only", False)
     if not isinstance(interaction_only, bool):
         raise DoodleError(f"{where}: field 'interaction_only' must be true or false, not {interaction_only!r}")
+    shape = entry.get("shape")
+    if shape is not None and (not isinstance(shape, str) or not shape.endswith(".npz")):
+        raise DoodleError(f"{where}: field 'shape' must be the path of a .npz file of example paths")
+    track = entry.get("track")
+    if track is not None and (not isinstance(track, str) or not track.strip()):
+        raise DoodleError(f"{where}: field 'track' must be a track name such as \"c0\"")
     flags = {}
     for flag in FLAGS:
         value = entry.get(flag, False)
@@ -219,7 +229,8 @@ def _action(entry, i: int, path: Path) -> ActionDef:
                      stages=tuple(stages) if stages is not None else None,
                      cycle_length=float(cycle) if cycle is not None else None,
                      tolerance=float(tolerance) if tolerance is not None else None,
-                     interaction_only=interaction_only, **flags)
+                     interaction_only=interaction_only,
+                     shape=str((path.parent / shape).resolve()) if shape is not None else None, track=track, **flags)
 
 
 def builtin() -> Library:
@@ -275,6 +286,10 @@ def format_library(library: Library, folder) -> str:
             lines.append(f"tolerance = {a.tolerance:g}")
         if a.interaction_only:
             lines.append("interaction_only = true")
+        if a.shape is not None:
+            lines.append(f"shape = {_toml_string(os.path.relpath(a.shape, folder))}")
+        if a.track is not None:
+            lines.append(f"track = {_toml_string(a.track)}")
         if a.note:
             lines.append(f"note = {_toml_string(a.note)}")
         lines.append("")
