@@ -19,7 +19,7 @@ recurrence vectorised over templates), about 0.2 ms for 33 templates of 31 steps
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -81,6 +81,9 @@ def shape_distance(x: np.ndarray, templates: np.ndarray) -> float:
 
 REACH = 3  # tokens a refined segment may extend past the Matcher's at either end
 TRIM = 3  # tokens it may give up at either end
+UNKNOWN_REACH = 8  # tokens it may take from a neighbouring unknown run
+SPOT_TOKENS, SPOT_MAX = 4, 40  # unknown runs of this many tokens are searched for a learned action…
+SPOT = 0.5  # …found when its shape distance is under this part of the action's rejection distance
 MIN_REJECT = 0.4  # shape distance under which a learned action is never rejected
 
 
@@ -144,10 +147,12 @@ def load_paths(path, action: str = "") -> np.ndarray:
     return paths
 
 
-def shape_set(named: dict, expressions: dict, tracks: dict | None = None, cap: float = 40.0) -> ShapeSet | None:
+def shape_set(named: dict, expressions: dict, tracks: dict | None = None, cap: float = 20.0,
+              automaton=None) -> ShapeSet | None:
     """A :class:`ShapeSet` from ``{action: example paths (k, POINTS, 3)}``, the actions'
     expressions and the tracks they are bound to (``{action: track}``, default none); None
-    when no action has shapes."""
+    when no action has shapes. Edit distances count up to ``cap``; ``automaton``, when
+    given, is a ready one of the same expressions in the same order (no pause protection)."""
     if not named:
         return None
     from grammar.automata import compile_expression
@@ -157,8 +162,8 @@ def shape_set(named: dict, expressions: dict, tracks: dict | None = None, cap: f
     names = tuple(named)
     dirs = [np.array([directions(p) for p in named[n]]) for n in names]
     owner = np.concatenate([np.full(len(d), k) for k, d in enumerate(dirs)])
-    auto = Automaton(list(names), [compile_expression(parse(expressions[n], n)) for n in names], threshold=cap,
-                     protect_still=False)
+    auto = automaton or Automaton(list(names), [compile_expression(parse(expressions[n], n)) for n in names],
+                                  threshold=cap, protect_still=False)
     return ShapeSet(names, np.concatenate(dirs), owner, np.array([reject_distance(d) for d in dirs]), auto,
                     tuple((tracks or {}).get(n) for n in names))
 
@@ -186,11 +191,13 @@ def refine(segments: list, tokens: list, p: np.ndarray, valid: np.ndarray, shape
 class Refiner:
     """The Matcher's segments of one track, re-decided by the learned actions' shapes.
 
-    Segments are taken in order. One whose action has shapes is re-decided once the
-    :data:`REACH` tokens after it are known: every window of whole tokens from up to
-    :data:`REACH` tokens before to :data:`TRIM` after its first token, and likewise around
-    its last (no window starts or ends on a pause, none reaches back into what is already
-    decided), is scored for every shaped action as ``edits + WEIGHT × shape distance``; the
+    Segments are taken in order. One whose action has shapes is re-decided once the next
+    segment and the :data:`REACH` tokens after it are known: every window of whole tokens
+    from up to :data:`REACH` tokens before to :data:`TRIM` after its first token, and
+    likewise around its last — or, when the next segment has shapes too, around the next
+    one's last (the Matcher, with a learned action's large tolerance, may cut one long
+    gesture in two) — no window starting or ending on a pause or reaching back into what
+    is already decided, is scored for every shaped action as ``edits + WEIGHT × shape distance``; the
     best window and action win — or, when its shape distance is over that action's
     :attr:`ShapeSet.reject`, the segment is unknown. Tokens a window takes from the next
     segment are taken from it; tokens it gives up are unknown. Other segments pass through
@@ -214,49 +221,79 @@ class Refiner:
         """Segments from the Matcher (in order) → segments decided so far."""
         self._waiting += segments
         out = []
-        while self._waiting and (self._waiting[0].action not in self.shapes.names
-                                 or len(self.tokens) >= self._waiting[0].stop + REACH):
-            out += self._decide(self._waiting.pop(0), len(self.tokens))
+        while self._waiting and self._ready():
+            after = self._waiting[1] if len(self._waiting) > 1 else None
+            out += self._decide(self._waiting.pop(0), after, len(self.tokens))
         return out
+
+    def _ready(self) -> bool:
+        first = self._waiting[0]
+        if first.action not in self.shapes.names:
+            return True
+        if len(self._waiting) < 2:  # the next segment decides how far a window may reach
+            return False
+        after = self._waiting[1]
+        return len(self.tokens) >= (after.stop if after.action in self.shapes.names else first.stop) + REACH
 
     def close(self) -> list:
         out = []
         while self._waiting:
-            out += self._decide(self._waiting.pop(0), len(self.tokens))
+            after = self._waiting[1] if len(self._waiting) > 1 else None
+            out += self._decide(self._waiting.pop(0), after, len(self.tokens))
         if self._unknown is not None:
             out.append(self._unknown)
             self._unknown = None
         return out
 
-    def _decide(self, seg, known: int) -> list:
+    def _decide(self, seg, after, known: int) -> list:
         from grammar.matcher import UNKNOWN
 
         first = max(seg.first, self._done)
         if first >= seg.stop:
             return []
-        if seg.action == UNKNOWN or seg.action not in self.shapes.names:
+        if seg.action == UNKNOWN and SPOT_TOKENS <= seg.stop - first <= SPOT_MAX:
+            best = self._best(range(first, seg.stop), [(first + 2, seg.stop)], known, SPOT)
+        elif seg.action in self.shapes.names:
+            pending = self._unknown is not None and self._unknown.stop == first
+            lowest = self._unknown.first if pending else first  # it may take back tokens of an unknown run
+            back = UNKNOWN_REACH if pending else REACH
+            ends = [(seg.stop - TRIM, seg.stop + REACH)]
+            if after is not None and after.action in self.shapes.names:  # one gesture the Matcher cut in two
+                ends.append((after.stop - TRIM, after.stop + REACH))
+            elif after is not None and after.action == UNKNOWN:
+                ends.append((seg.stop, min(after.stop, seg.stop + UNKNOWN_REACH)))
+            best = self._best(range(max(lowest, seg.first - back), min(seg.stop, seg.first + TRIM + 1)), ends, known)
+            if best is None:
+                return self._emit(UNKNOWN, first, seg.stop, False, None)
+        else:
             return self._emit(seg.action, first, seg.stop, seg.exact, seg.distance)
-        best = self._best(first, seg.first, seg.stop, known)
         if best is None:
             return self._emit(UNKNOWN, first, seg.stop, False, None)
         f, e, k, edits = best
+        if f < first:  # taken back from the pending unknown run
+            pending = self._unknown
+            self._unknown = None if f <= pending.first else replace(pending, stop=f, end=self.tokens[f - 1].end)
+            self._done = f
         return (self._emit(UNKNOWN, first, f, False, None) + self._emit(self.shapes.names[k], f, e, edits == 0.0, edits)
                 + self._emit(UNKNOWN, e, seg.stop, False, None))
 
-    def _best(self, lowest: int, first: int, stop: int, known: int):
+    def _best(self, starts: range, ends: list, known: int, strict: float = 1.0):
+        """The best (first, stop, action, edits) over windows starting in ``starts`` and
+        ending in one of the ``ends`` intervals, or None when its shape distance is over
+        ``strict`` × the action's rejection distance."""
         from doodle.tokens import CODES
 
         names = [k.name for k in self.tokens]
         auto = self.shapes.automaton
-        last = min(known, stop + REACH)
+        last = min(known, max(hi for _, hi in ends))
         windows, edits, dirs = [], [], []
-        for f in range(max(lowest, first - REACH), min(stop, first + TRIM + 1)):
+        for f in starts:
             if names[f] == "T_STILL":
                 continue
             d = auto.initial.copy()
             for e in range(f + 1, last + 1):
                 d = auto.step(d, CODES[names[e - 1]])
-                if e < stop - TRIM or names[e - 1] == "T_STILL":
+                if not any(lo <= e <= hi for lo, hi in ends) or names[e - 1] == "T_STILL":
                     continue
                 a, b = self.tokens[f].start, self.tokens[e - 1].end
                 path = self.p[a:b][self.valid[a:b]]
@@ -270,7 +307,7 @@ class Refiner:
         edits = np.array(edits)
         score = np.where(self._allowed, edits + WEIGHT * ds, np.inf)
         w, k = np.unravel_index(int(np.argmin(score)), score.shape)
-        if not np.isfinite(score[w, k]) or ds[w, k] > self.shapes.reject[k]:
+        if not np.isfinite(score[w, k]) or ds[w, k] > strict * self.shapes.reject[k]:
             return None
         return windows[w][0], windows[w][1], int(k), float(edits[w, k])
 

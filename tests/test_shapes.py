@@ -1,0 +1,169 @@
+"""Shapes of learned actions (grammar/shapes.py): DTW against many templates at once, the
+shape file format, the Refiner (streaming equals batch), track binding, and recognition of
+held-out real performances that tokens alone confuse."""
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from doodle.cli import main
+from doodle.errors import DoodleError
+from grammar import shapes
+from grammar.learn import _dtw_cost
+
+VIVE = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "vive-gestures"
+
+
+def _vive(gesture, user="Sub_U001"):
+    files = [VIVE / user / gesture / f"ex_{k}_moderate.csv" for k in range(5)]
+    if not all(f.exists() for f in files):
+        pytest.skip("real Vive recordings not found")
+    return [str(f) for f in files]
+
+
+@settings(max_examples=25, deadline=None)
+@given(st.integers(3, 12), st.integers(3, 12), st.integers(1, 4), st.integers(0, 2**31))
+def test_batched_dtw_equals_one_by_one(n, m, k, seed):
+    rng = np.random.default_rng(seed)
+    x, templates = rng.normal(size=(n, 3)), rng.normal(size=(k, m, 3))
+    one = shapes.dtw_costs(x, templates)
+    assert np.allclose(one * max(n, m), [_dtw_cost(x, t) for t in templates])
+    batch = shapes.dtw_costs(np.stack([x, x[::-1]]), templates)
+    assert np.allclose(batch[0], one) and np.allclose(batch[1], shapes.dtw_costs(x[::-1], templates))
+
+
+def test_resampled_directions_ignore_speed_and_place():
+    s = np.linspace(0, 1, 200)
+    path = np.column_stack([np.cos(3 * s), np.sin(3 * s), s])
+    slow = path[np.searchsorted(s, s ** 2)]  # the same path, travelled unevenly
+    a = shapes.directions(shapes.resample(path))
+    b = shapes.directions(shapes.resample(slow + [5.0, -2.0, 1.0]))
+    assert a.shape == (shapes.POINTS - 1, 3) and np.allclose(np.linalg.norm(a, axis=1), 1.0)
+    assert shapes.shape_distance(a, b[None]) < 0.01
+    assert shapes.shape_distance(a, a[::-1][None]) > 1.0  # backwards is far
+    assert np.all(shapes.resample(np.zeros((5, 3))) == 0)  # a still hand: no NaN
+
+
+def test_shape_files_round_trip_and_bad_files(tmp_path):
+    paths = np.random.default_rng(0).normal(size=(3, shapes.POINTS, 3))
+    good = tmp_path / "a.npz"
+    shapes.save_paths(good, paths)
+    assert np.array_equal(shapes.load_paths(good), paths)
+    with pytest.raises(DoodleError, match="no such file"):
+        shapes.load_paths(tmp_path / "missing.npz", "Wave")
+    (tmp_path / "junk.npz").write_text("not a zip")
+    with pytest.raises(DoodleError, match="junk.npz.*not a shape file"):
+        shapes.load_paths(tmp_path / "junk.npz")
+    np.savez(tmp_path / "obj.npz", paths=np.array([{"x": 1}], dtype=object))
+    with pytest.raises(DoodleError, match="obj.npz"):  # pickled objects are refused, never loaded
+        shapes.load_paths(tmp_path / "obj.npz")
+    np.savez(tmp_path / "flat.npz", paths=np.zeros((4, 3)))
+    with pytest.raises(DoodleError, match="flat.npz.*examples, points"):
+        shapes.load_paths(tmp_path / "flat.npz")
+    bad = paths.copy()
+    bad[0, 3, 1] = np.nan
+    np.savez(tmp_path / "nan.npz", paths=bad)
+    with pytest.raises(DoodleError, match="nan.npz.*NaN"):
+        shapes.load_paths(tmp_path / "nan.npz", "Wave")
+
+
+def _learn_all(tmp_path, gestures, user="Sub_U001"):
+    lib = tmp_path / "mine"
+    files = {}
+    for g in gestures:
+        files[g] = _vive(g, user)
+        assert main(["learn", g, *files[g][:3], "--library", str(lib), "--convention", "unity", "--no-builtin"]) == 0
+    return lib, files
+
+
+CONFUSED = ["hook_right", "golf_swing", "uppercut_left", "uppercut_right", "left_right_left_combo",
+            "right_left_right_combo"]  # Sub_U005's: token strings alone mistake five of their held-out takes
+
+
+def test_held_out_performances_recognised_by_shape(tmp_path, capsys):
+    """Six gestures of one person whose token strings are close (uppercuts, a hook, a golf
+    swing and the combos of either hand): each held-out performance is reported as its
+    action, covering most of it."""
+    lib, files = _learn_all(tmp_path, CONFUSED, "Sub_U005")
+    text = (lib / "library.toml").read_text()
+    assert text.count("shape = \"shapes/") == len(CONFUSED) and (lib / "shapes" / "hook_right.npz").exists()
+    capsys.readouterr()
+    named_right = covering = 0
+    for g in CONFUSED:
+        for path in files[g][3:]:
+            assert main(["recognize", "--library", str(lib), "--no-builtin", "--convention", "unity", "--json",
+                         "--tracks", "c0", path]) == 0
+            segs = json.loads(capsys.readouterr().out)["segments"]
+            named = [s for s in segs if s["action"] != "unknown"]
+            longest = max(named, key=lambda s: s["end"] - s["start"], default=None)
+            named_right += longest is not None and longest["action"] == g
+            covering += longest is not None and longest["action"] == g and \
+                longest["end"] - longest["start"] > 0.5 * (segs[-1]["end"] - segs[0]["start"])
+    assert named_right == 12
+    assert covering >= 11  # token expressions alone: 6 of 12 named and covering (measured in development)
+
+
+def test_streaming_refiner_equals_batch(tmp_path):
+    from doodle.loader import load
+    from doodle.pipeline import load_actions, recognize, track_automata
+    from doodle.replay import replay
+
+    lib, files = _learn_all(tmp_path, ["hook_left", "hook_right", "golf_swing"])
+    compiled = load_actions(lib, False)
+    assert compiled.shapes is not None and set(compiled.shapes.names) == {"hook_left", "hook_right", "golf_swing"}
+    for path in (files["hook_left"][3], files["golf_swing"][4]):
+        doodle = load(path, convention="unity")
+        found, _ = replay(doodle, track_automata(compiled, doodle.names), shapes=compiled.shapes)
+        batch = recognize(doodle, compiled)
+        expected = sorted((name, s.action, float(doodle.track(name).t[s.start]))
+                          for name, (_, segs) in batch.items() for s in segs if s.action != "unknown")
+        assert sorted((r.track, r.action, r.start) for r in found) == expected
+        assert any(a in path for _, a, _ in expected)
+
+
+def test_learned_pair_is_bound_to_its_controllers(tmp_path, capsys):
+    from library.manifest import load_library
+
+    files = _vive("golf_swing")
+    lib = tmp_path / "pair"
+    assert main(["learn", "Golf", *files[:3], "--library", str(lib), "--convention", "unity",
+                 "--tracks", "c0,c1"]) == 0
+    library = load_library(lib)
+    assert [(a.name, a.track) for a in library.actions] == [("Golf.c0", "c0"), ("Golf.c1", "c1")]
+    capsys.readouterr()
+    for path in files[3:]:
+        assert main(["recognize", "--library", str(lib), "--no-builtin", "--convention", "unity", "--json",
+                     path]) == 0
+        segs = json.loads(capsys.readouterr().out)["segments"]
+        assert all(s["action"] in ("unknown", f"Golf.{s['track']}") for s in segs)  # never the other hand's
+
+
+def test_manifest_shape_and_track_fields(tmp_path):
+    from library.manifest import format_library, load_library
+
+    (tmp_path / "library.toml").write_text('[library]\nname = "x"\n\n[[actions]]\nname = "A"\n'
+                                           'expression = "T_X T_Y"\nshape = "shapes/a.npz"\ntrack = "c1"\n')
+    lib = load_library(tmp_path)
+    assert lib.actions[0].shape == str(tmp_path / "shapes" / "a.npz") and lib.actions[0].track == "c1"
+    (tmp_path / "again").mkdir()
+    (tmp_path / "again" / "library.toml").write_text(format_library(lib, tmp_path))
+    again = load_library(tmp_path / "again")
+    assert again.actions[0].track == "c1" and again.actions[0].shape.endswith("shapes/a.npz")
+    for field, value, message in (("shape", "1", "'shape' must be the path of a .npz"),
+                                  ("shape", '"a.txt"', "'shape' must be"),
+                                  ("track", '""', "'track' must be a track name")):
+        (tmp_path / "library.toml").write_text(f'[library]\nname = "x"\n\n[[actions]]\nname = "A"\n'
+                                               f'expression = "T_X"\n{field} = {value}\n')
+        with pytest.raises(DoodleError, match=message):
+            load_library(tmp_path)
+    # a shape file that is not there: named when the library is compiled
+    (tmp_path / "library.toml").write_text('[library]\nname = "x"\n\n[[actions]]\nname = "A"\n'
+                                           'expression = "T_X T_Y"\nshape = "shapes/a.npz"\n')
+    from grammar.library import compile_library
+
+    with pytest.raises(DoodleError, match="a.npz \\(shape of action 'A'\\): no such file"):
+        compile_library(load_library(tmp_path))
