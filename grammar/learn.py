@@ -70,25 +70,47 @@ def _resample(t, x, n):
     return np.column_stack([np.interp(grid, t, c) for c in x.T])
 
 
+def _dtw_paths(a: np.ndarray, bs: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
+    """Indices (i, j) of the optimal DTW alignment (squared l2 cost) of a (n, d) with each
+    of bs (k, m, d) — the cumulative costs of all k computed at once, row by row."""
+    bs = np.asarray(bs, dtype=float)
+    k, m, _ = bs.shape
+    n = len(a)
+    cost = ((a[None, :, None, :] - bs[:, None, :, :]) ** 2).sum(axis=3)  # (k, n, m)
+    D = np.empty((k, n, m))
+    D[:, 0] = np.cumsum(cost[:, 0], axis=1)
+    for i in range(1, n):
+        base = np.empty((k, m))
+        base[:, 0] = cost[:, i, 0] + D[:, i - 1, 0]
+        base[:, 1:] = cost[:, i, 1:] + np.minimum(D[:, i - 1, :-1], D[:, i - 1, 1:])  # from (i-1, j-1) or (i-1, j)
+        c = np.cumsum(cost[:, i], axis=1)  # from (i, j-1): a prefix minimum
+        D[:, i] = np.minimum.accumulate(base - c, axis=1) + c
+    out = []
+    for Dk in D.tolist():  # Python floats: the walk back reads them one by one
+        i, j = n - 1, m - 1
+        path = [(i, j)]
+        while i > 0 or j > 0:
+            if i == 0:
+                j -= 1
+            elif j == 0:
+                i -= 1
+            else:
+                diag, up, left = Dk[i - 1][j - 1], Dk[i - 1][j], Dk[i][j - 1]
+                if diag <= up and diag <= left:
+                    i, j = i - 1, j - 1
+                elif up <= left:
+                    i -= 1
+                else:
+                    j -= 1
+            path.append((i, j))
+        ij = np.array(path[::-1])
+        out.append((ij[:, 0], ij[:, 1]))
+    return out
+
+
 def _dtw_path(a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Indices (i, j) of the optimal DTW alignment of a (n, d) and b (m, d), squared l2 cost."""
-    n, m = len(a), len(b)
-    cost = ((a[:, None, :] - b[None, :, :]) ** 2).sum(axis=2)
-    D = np.full((n + 1, m + 1), np.inf)
-    D[0, 0] = 0.0
-    for i in range(1, n + 1):  # row by row
-        base = cost[i - 1] + np.minimum(D[i - 1, :-1], D[i - 1, 1:])  # from (i-1, j-1) or (i-1, j)
-        # from (i, j-1): row[j] = min over k ≤ j of base[k] + cost[i-1, k+1..j], a prefix minimum
-        c = np.cumsum(cost[i - 1])
-        D[i, 1:] = np.minimum.accumulate(base - c) + c
-    i, j = n, m
-    path = [(i - 1, j - 1)]
-    while i > 1 or j > 1:
-        steps = [(D[i - 1, j - 1], i - 1, j - 1), (D[i - 1, j], i - 1, j), (D[i, j - 1], i, j - 1)]
-        _, i, j = min(steps)
-        path.append((i - 1, j - 1))
-    ij = np.array(path[::-1])
-    return ij[:, 0], ij[:, 1]
+    return _dtw_paths(a, b[None])[0]
 
 
 def dba(examples: list[tuple[np.ndarray, np.ndarray, np.ndarray]], points: int = POINTS,
@@ -100,16 +122,15 @@ def dba(examples: list[tuple[np.ndarray, np.ndarray, np.ndarray]], points: int =
         qs = _resample(t, q, points)
         quats.append(qs / np.linalg.norm(qs, axis=1, keepdims=True))
         feats.append(np.column_stack([_resample(t, p, points), LEVER * quat.log(quats[-1])]))
-    dist = np.zeros((len(feats), len(feats)))
-    for i in range(len(feats)):
-        for j in range(i + 1, len(feats)):
-            dist[i, j] = dist[j, i] = _dtw_cost(feats[i], feats[j])
+    from grammar.shapes import dtw_costs
+
+    stacked = np.array(feats)
+    dist = np.array([dtw_costs(f, stacked) for f in feats])
     medoid = int(np.argmin(dist.sum(axis=1)))
     avg, avg_q = feats[medoid].copy(), quats[medoid].copy()
     for _ in range(iterations):
         sums, qsum, counts = np.zeros_like(avg), np.zeros_like(avg_q), np.zeros(points)
-        for f, qq in zip(feats, quats):
-            i, j = _dtw_path(avg, f)
+        for f, qq, (i, j) in zip(feats, quats, _dtw_paths(avg, stacked)):
             np.add.at(sums, i, f[j])
             signs = np.where(np.sum(qq[j] * avg_q[i], axis=1) < 0, -1.0, 1.0)
             np.add.at(qsum, i, qq[j] * signs[:, None])

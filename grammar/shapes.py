@@ -24,6 +24,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 POINTS = 32  # points per resampled path (31 steps)
+CHUNK = 2048  # paths × templates compared at once (a few MB)
 WEIGHT = 31.0  # edits one unit of shape distance counts as (a step whose direction is 1 apart, each step)
 
 
@@ -105,6 +106,9 @@ class ShapeSet:
 
     def distances(self, x: np.ndarray) -> np.ndarray:
         """Per action, the shape distance of directions x (n, 3), or of each of a batch (B, n, 3)."""
+        if x.ndim == 3 and len(x) * len(self.templates) > CHUNK:  # bounded memory: in chunks of windows
+            step = max(1, CHUNK // len(self.templates))
+            return np.concatenate([self.distances(x[k:k + step]) for k in range(0, len(x), step)])
         costs = dtw_costs(x, self.templates)
         return np.minimum.reduceat(costs, np.searchsorted(self.owner, np.arange(len(self.names))), axis=-1)
 
