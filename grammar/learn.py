@@ -297,7 +297,28 @@ def tolerance(strings: tuple[tuple[str, ...], ...], examples: int) -> float:
     held = [k for k in range(examples) if any(s for j, s in enumerate(strings) if j != k)]
     if not held:
         return MIN_TOLERANCE
-    loo = [expression_of([s for j, s in enumerate(strings) if j != k]).expression for k in held]
-    auto = _automaton(loo, MAX_TOLERANCE)  # one automaton, one block per left-out example
-    worst = max(float(_run(auto, strings[k])[i]) for i, k in enumerate(held))
+    from grammar.automata import compile_expression
+    from grammar.expr import parse
+
+    worst = max(_edit_distance(compile_expression(parse(expression_of([s for j, s in enumerate(strings)
+                                                                        if j != k]).expression)),
+                               strings[k], MAX_TOLERANCE) for k in held)
     return float(np.clip(worst + 1.0, MIN_TOLERANCE, MAX_TOLERANCE))
+
+
+def _edit_distance(dfa, string: tuple[str, ...], cap: float) -> float:
+    """Edit distance (1 per insertion, deletion, substitution) from a token string to one
+    DFA's language, capped — the Matcher's recurrence for one action without building its
+    tables for every token."""
+    from doodle.tokens import CODES
+    from grammar.matcher import _insertion_closure
+
+    reach = _insertion_closure(dfa, cap + 1.0)  # fewest insertions from p to r
+    src, sym = np.nonzero(dfa.table >= 0)
+    dst = dfa.table[src, sym]
+    d = np.minimum(reach[0], cap + 1.0)
+    for name in string:
+        new = d + 1.0  # the token deleted
+        np.minimum.at(new, dst, d[src] + (sym != CODES[name]))  # matched or substituted along an edge
+        d = np.minimum((new[:, None] + reach).min(axis=0), cap + 1.0)  # then insertions
+    return float(min(d[dfa.accept].min(), cap + 1.0))
