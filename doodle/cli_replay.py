@@ -37,12 +37,16 @@ def cmd_replay(args) -> int:
 
     def show(r):
         how = "exact" if r.exact else f"distance {r.distance:g}"
+        role = f"  [{r.interaction}, role {r.role}]" if r.interaction else ""
         print(f"  {r.at:8.2f} s  {r.track}  {r.action:<16} {r.start:7.2f}–{r.end:7.2f} s  {how:<12} "
-              f"latency {r.latency:.2f} s", flush=True)
+              f"latency {r.latency:.2f} s{role}", flush=True)
 
-    found, costs = replay(doodle, automata, params, args.speed or None, show, shapes=compiled.shapes)
-    lat = [r.latency for r in found]
-    print(f"{len(found)} action(s); latency after a gesture ends: median {np.median(lat) if lat else 0:.2f} s; "
+    found, costs = replay(doodle, automata, params, args.speed or None, show, shapes=compiled.shapes,
+                          compiled=compiled, threshold=args.threshold)
+    actions = [r for r in found if not r.interaction]
+    lat = [r.latency for r in actions]
+    together = len({(r.interaction, r.start) for r in found if r.interaction and r.role == 0})
+    print(f"{len(actions)} action(s){f', {together} interaction(s)' if together else ''}; latency after a gesture ends: median {np.median(lat) if lat else 0:.2f} s; "
           f"processing per frame: p50 {np.percentile(costs, 50) * 1e3:.3f} ms, p99 {np.percentile(costs, 99) * 1e3:.3f} ms",
           file=sys.stdout)
     return 0

@@ -222,3 +222,63 @@ def _nearest(t: np.ndarray, times: np.ndarray) -> np.ndarray:
         return np.zeros(len(times), dtype=np.int64)
     i = np.clip(np.searchsorted(t, times), 1, len(t) - 1)
     return np.where(np.abs(t[i - 1] - times) <= np.abs(t[i] - times), i - 1, i)
+
+
+class LiveContexter:
+    """The Contexter on streams (replay): tracks are read in parallel; each track's final
+    segments (and, for ``interaction_only`` roles, the segments of a role Matcher fed the
+    same tokens) are pooled as they come, and an interaction is reported once every track
+    has decided past its end — so no segment still to come could take its place and what
+    is reported equals the batch :func:`with_interactions` on the same segments.
+    """
+
+    def __init__(self, doodle, compiled, threshold: float = 2.0, radius: float | dict = RADIUS, mode: str = "any"):
+        from grammar.matcher import Matcher
+
+        self.doodle = doodle
+        self.contexter = Contexter(compiled.library.interactions, radius, mode)
+        names = [tr.name for tr in doodle.tracks]
+        self.pools = {n: [] for n in names}
+        self.frontier = {n: -np.inf for n in names}
+        auto = compiled.roles.automaton(threshold) if compiled.roles is not None else None
+        self.role_matchers = {n: Matcher(auto, n) for n in names} if auto is not None else {}
+        self.role_frontier = {n: -np.inf for n in names} if auto is not None else {}
+        self._reported = set()
+
+    def push_token(self, track: str, token) -> list:
+        """One token of a track (for the role Matchers); returns newly recognised interactions."""
+        if not self.role_matchers:
+            return []
+        return self._add(track, self.role_matchers[track].push(token), self.role_frontier)
+
+    def push_segments(self, track: str, segments: list) -> list:
+        """A track's newly final segments; returns newly recognised interactions."""
+        return self._add(track, segments, self.frontier)
+
+    def close(self) -> list:
+        """End of every stream: the interactions not reported yet."""
+        for n, m in self.role_matchers.items():
+            self._add(n, m.close(), self.role_frontier, check=False)
+        return self._check(final=True)
+
+    def _add(self, track: str, segments: list, frontier: dict, check: bool = True) -> list:
+        if not segments:
+            return []
+        tr = self.doodle.track(track)
+        for s in segments:
+            frontier[track] = max(frontier[track], _time(tr, s.end - 1))
+            if s.action != "unknown":
+                self.pools[track].append(s)
+        return self._check() if check and self.contexter.rules else []
+
+    def _check(self, final: bool = False) -> list:
+        """Newly recognised interactions: ``(Found, [segment per role])``."""
+        decided = min(min(self.frontier.values()), min(self.role_frontier.values(), default=np.inf))
+        out = []
+        for f in self.contexter.select(self.doodle, self.pools):
+            segs = [self.pools[tr][x] for tr, x in zip(f.tracks, f.indices)]
+            key = (f.interaction, tuple((tr, s.first, s.action) for tr, s in zip(f.tracks, segs)))
+            if key not in self._reported and (final or decided >= f.t1):
+                self._reported.add(key)
+                out.append((f, segs))
+        return out

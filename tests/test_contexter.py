@@ -296,3 +296,35 @@ def test_a_two_character_slap_scene_compiles_with_the_interaction(tmp_path, caps
     capsys.readouterr()
     assert main(["recognize", str(path)]) == 0
     assert "Slap [Slap, role 0]" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("compiled", ["ordinary roles", "builtin interaction-only roles"])
+def test_streaming_contexter_equals_batch(compiled):
+    """Tracks read in parallel (``doodle replay``): the interactions reported as the streams
+    go are those the batch Contexter finds, each after both roles have ended, and none when
+    the characters are apart."""
+    from doodle.pipeline import track_automata
+    from doodle.replay import replay
+
+    lib = COMPILED if compiled == "ordinary roles" else BUILTIN
+    a, b = (SLAP, SLAPPED) if lib is COMPILED else (["T_N_Z", "T_Z"], [])
+    for gap, expect in ((0.3, True), (1.0, False)):
+        doodle = scene(a, b, gap)
+        batch = recognize_interactions(doodle, lib)
+        want = sorted((tr, s.action, s.interaction, s.role) for tr, segs in batch.items() for s in segs
+                      if isinstance(s, InteractionSegment))
+        found, _ = replay(doodle, track_automata(lib, doodle.names), compiled=lib)
+        got = sorted((r.track, r.action, r.interaction, r.role) for r in found if r.interaction)
+        assert got == want and bool(got) == expect
+        assert all(r.at >= r.end for r in found if r.interaction)
+
+
+def test_replay_command_shows_interactions(tmp_path, capsys):
+    from doodle.cli import main
+    from doodle.fileformat import write_doodle
+
+    path = tmp_path / "slap.doodle"
+    write_doodle(path, scene(["T_N_Z", "T_Z"], [], 0.3))
+    assert main(["replay", str(path), "--speed", "0"]) == 0
+    out = capsys.readouterr().out
+    assert "[Slap, role 0]" in out and "[Slap, role 1]" in out and "1 interaction(s)" in out
