@@ -119,6 +119,7 @@ def cmd_recognize(args) -> int:
             segments = [
                 {"track": name, "action": s.action, "start": seconds(s.start), "end": seconds(s.end),
                  "exact": s.exact, "distance": s.distance, "interaction": getattr(s, "interaction", None),
+                 **({"refused": s.refused, "reason": s.reason} if getattr(s, "refused", "") else {}),
                  "samples": [s.start, s.end], "tokens": [k.name for k in toks[s.first:s.stop]]}
                 for name, (toks, segs) in result.items() for s in segs
             ]
@@ -130,6 +131,8 @@ def cmd_recognize(args) -> int:
             if args.verbose:
                 for s in segs:
                     how = "exact" if s.exact else ("no match" if s.action == "unknown" else f"distance {s.distance:g}")
+                    if getattr(s, "refused", ""):
+                        how = f"refused {s.refused} ({s.reason})"
                     print(f"    {seconds(s.start):8.3f} {seconds(s.end):8.3f}  {s.action:<16} {how:<12} "
                           f"{' '.join(k.name for k in toks[s.first:s.stop])}")
 
@@ -137,8 +140,10 @@ def cmd_recognize(args) -> int:
 
 
 def _named(segment) -> str:
-    """An action, with the interaction it plays a role in."""
+    """An action, with the interaction it plays a role in (or why it was refused)."""
     inter = getattr(segment, "interaction", None)
+    if getattr(segment, "refused", ""):
+        return f"unknown (refused {segment.refused}: {segment.reason})"
     return f"{segment.action} [{inter}, role {segment.role}]" if inter else segment.action
 
 

@@ -119,7 +119,8 @@ def cmd_learn(args) -> int:
     interactions = tuple(i for i in existing.interactions if i.name != name)
     if len(names) > 1:
         interactions += (Interaction(name, tuple(names)),)
-    library = Library(existing.name, kept + tuple(new), existing.source, existing.roles, interactions)
+    library = Library(existing.name, kept + tuple(new), existing.source, existing.roles, interactions,
+                      existing.states)
     (folder / "shapes").mkdir(parents=True, exist_ok=True)
     for shape, lrn in zip(shapes, learned):  # first: compiling the library reads them
         save_paths(shape, lrn.paths)

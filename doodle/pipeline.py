@@ -49,6 +49,13 @@ def recognize(doodle: Doodle, compiled: Compiled, params: SegmenterParams = Segm
 
         resolved = with_interactions(doodle, compiled, result, threshold)
         result = {name: (toks, resolved[name]) for name, (toks, _) in result.items()}
+    from grammar.contexter import apply_behaviour, behaviours
+
+    rules = behaviours(compiled)
+    if rules:  # behaviour states (§6.3.3): actions whose pre-conditions fail are refused
+        walked = apply_behaviour(doodle, {name: segs for name, (_, segs) in result.items()}, rules,
+                                 frozenset(compiled.library.states), frozenset(compiled.library.names))
+        result = {name: (toks, walked[name]) for name, (toks, _) in result.items()}
     return result
 
 

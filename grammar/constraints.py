@@ -12,10 +12,11 @@ characters' states at one time.
   direction ``P_j − P_i`` is projected on the ground too, so a height difference between the
   figurines does not narrow the view. A figurine pointing straight up or down has no front
   (zero vector): V then fails for any γ > 0.
-* Behaviour states (§6.3.3): a character's state is a set of boolean variables; an action or
-  interaction may require some true and some false (pre-conditions) and set or clear some
-  when it ends (post-conditions). :class:`Behaviour` is that, as plain sets; it is not yet
-  read from manifests nor used by the Contexter.
+* Behaviour states (§6.3.3): a character's state is a set of boolean variables; an action
+  may require some true and some false (pre-conditions) and set or clear some when it ends
+  (post-conditions). :class:`Behaviour` is that, as plain sets, read from the manifest's
+  ``requires``/``forbids``/``sets``/``clears`` fields (the library's ``states`` are true at
+  the start); :func:`grammar.contexter.apply_behaviour` applies them to recognised segments.
 
 Constraints are written in the thesis's notation, e.g. ``"D(0, 1, Personal)"``,
 ``"V(1, 0, 0.5)"``, ``"MV(0, 1, -0.5)"``; indices are roles (the position of the action in
@@ -169,3 +170,14 @@ class Behaviour:
 
     def after(self, state: frozenset) -> frozenset:
         return (frozenset(state) - self.clears) | self.sets
+
+    def why(self, state: frozenset) -> str:
+        """Why it is not allowed in ``state`` ("" when it is)."""
+        missing, present = sorted(self.requires - state), sorted(self.forbids & state)
+        return "; ".join([f"needs {', '.join(missing)}"] * bool(missing) + [f"not while {', '.join(present)}"] * bool(present))
+
+    @staticmethod
+    def of(action) -> "Behaviour | None":
+        """An action definition's behaviour (``library.manifest.ActionDef``), None without one."""
+        parts = [frozenset(getattr(action, k)) for k in ("requires", "forbids", "sets", "clears")]
+        return Behaviour(*parts) if any(parts) else None

@@ -28,9 +28,13 @@ Roles that are ``interaction_only`` actions are matched on each track's tokens b
 of their own (:func:`recognize_interactions`) and, when the interaction holds, replace the
 independent segments they cover.
 
-Not yet here: the streaming form (the thesis reads tracks in parallel and stacks the
-independent actions while an interaction is partially matched), and behaviour states
-(§6.3.3, :class:`grammar.constraints.Behaviour` exists but is not applied).
+Streaming: :class:`LiveContexter` pools each track's final segments as they come and reports
+an interaction once every track has decided past its end (what ``doodle replay`` shows).
+
+Behaviour states (§6.3.3): :func:`apply_behaviour` walks each character's segments in time
+order from the library's initial state; a segment whose action's pre-conditions do not hold
+becomes :class:`Refused` (unknown, with the action and the reason), and an interaction one
+of whose roles is refused is dropped on every track.
 """
 
 from __future__ import annotations
@@ -40,7 +44,7 @@ from itertools import permutations, product
 
 import numpy as np
 
-from grammar.constraints import RADIUS, Constraint, State, all_hold, ground_front, parse_constraints
+from grammar.constraints import RADIUS, Behaviour, Constraint, State, all_hold, ground_front, parse_constraints
 from grammar.matcher import Segment
 
 MODES = ("any", "all")
@@ -282,3 +286,69 @@ class LiveContexter:
                 self._reported.add(key)
                 out.append((f, segs))
         return out
+
+
+@dataclass(frozen=True)
+class Refused(Segment):
+    """A segment whose action's pre-conditions (§6.3.3) did not hold: unknown, with the
+    action it was recognised as and why it was refused."""
+
+    refused: str = ""
+    reason: str = ""
+
+
+def behaviours(compiled) -> dict:
+    """Action name → :class:`Behaviour` for the actions (and interaction roles) that have one."""
+    actions = list(compiled.library.actions) + (list(compiled.roles.library.actions) if compiled.roles else [])
+    return {a.name: b for a in actions if (b := Behaviour.of(a)) is not None}
+
+
+def apply_behaviour(doodle, segments: dict[str, list[Segment]], rules: dict, initial=frozenset(),
+                    independent=frozenset()) -> dict[str, list[Segment]]:
+    """Each character's segments with behaviour states applied (§6.3.3): from ``initial``,
+    in time order, an action allowed by its pre-conditions updates the state by its
+    post-conditions, one that is not becomes :class:`Refused`. An interaction a role of
+    which is refused is dropped on every track: its other roles become plain segments of
+    their action (unknown when the role is not an ``independent`` action) and are checked
+    again as such."""
+    if not rules:
+        return segments
+    out, dropped = _walk(segments, rules, initial), []
+    for tr, segs in out.items():
+        for s, before in zip(segs, segments[tr]):
+            if isinstance(s, Refused) and isinstance(before, InteractionSegment):
+                track = doodle.track(tr)
+                dropped.append((before.interaction, _time(track, before.start), _time(track, before.end)))
+    if not dropped:
+        return out
+    stripped = {}
+    for tr, segs in segments.items():
+        track = doodle.track(tr)
+        stripped[tr] = [(refused if isinstance(refused, Refused) else _plain(s, independent))
+                        if isinstance(s, InteractionSegment) and any(
+                            s.interaction == name and _time(track, s.start) < t1 and _time(track, s.end) > t0
+                            for name, t0, t1 in dropped) else s for s, refused in zip(segs, out[tr])]
+    return _walk(stripped, rules, initial)
+
+
+def _walk(segments, rules, initial):
+    out = {}
+    for tr, segs in segments.items():
+        state, kept = frozenset(initial), []
+        for s in segs:
+            rule = rules.get(s.action)
+            if rule is None:
+                kept.append(s)
+            elif rule.allowed(state):
+                kept.append(s)
+                state = rule.after(state)
+            else:
+                kept.append(Refused("unknown", s.first, s.stop, s.start, s.end, False, None,
+                                    refused=s.action, reason=rule.why(state)))
+        out[tr] = kept
+    return out
+
+
+def _plain(s: Segment, independent) -> Segment:
+    return Segment(s.action if s.action in independent else "unknown", s.first, s.stop, s.start, s.end,
+                   s.exact, s.distance if s.action in independent else None)

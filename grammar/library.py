@@ -59,9 +59,10 @@ def compile_library(library: Library) -> Compiled:
         for a in inter.actions:
             if a not in names:
                 raise DoodleError(f"{library.source}: interaction {inter.name!r}: no action {a!r} in the library")
+    _check_invertible(library)
     recognisable = Library(library.name, tuple(a for a in library.actions if a.expression.strip()
                                                and not a.interaction_only), library.source,
-                           library.roles, library.interactions)
+                           library.roles, library.interactions, library.states)
     if not recognisable.actions:
         raise DoodleError(f"{library.source}: no action has an expression to recognise")
     named = {a.name: load_paths(a.shape, a.name) for a in recognisable.actions if a.shape}
@@ -70,13 +71,29 @@ def compile_library(library: Library) -> Compiled:
                               {a.name: a.track for a in recognisable.actions}))
 
 
+def _check_invertible(library: Library) -> None:
+    """Behaviour states (§6.3.3) must be invertible — "each action or interaction changing
+    one state variable must be invertible": a state some action sets, another clears, and
+    the other way round, so no character is stuck in it."""
+    sets = {v: a.name for a in library.actions for v in a.sets}
+    clears = {v: a.name for a in library.actions for v in a.clears}
+    for v, name in sets.items():
+        if v not in clears:
+            raise DoodleError(f"{library.source}: action {name!r} sets state {v!r} but no action clears it "
+                              "(a character could never leave it; add an action with clears = [...])")
+    for v, name in clears.items():
+        if v not in sets:
+            raise DoodleError(f"{library.source}: action {name!r} clears state {v!r} but no action sets it "
+                              "(add an action with sets = [...])")
+
+
 def compile_roles(library: Library) -> Compiled | None:
     """The automata of the actions that are only roles of interactions (``interaction_only``:
     the Contexter matches them; independent recognition never does), or None."""
     roles = tuple(a for a in library.actions if a.interaction_only and a.expression.strip())
     if not roles:
         return None
-    lib = Library(library.name, roles, library.source, library.roles, library.interactions)
+    lib = Library(library.name, roles, library.source, library.roles, library.interactions, library.states)
     return Compiled(lib, tuple(compile_action(a) for a in roles))
 
 

@@ -5,6 +5,7 @@ A library is a folder holding ``library.toml``::
     [library]
     name = "mine"
     format = 1
+    states = ["standing"]            # optional: state variables true for every character at the start
 
     [[actions]]
     name = "Wave"
@@ -20,6 +21,10 @@ A library is a folder holding ``library.toml``::
     tolerance = 6                    # optional: token edits a performance may differ by (default: the Matcher's 2)
     shape = "shapes/wave.npz"        # optional: the examples' paths (learned actions; grammar.shapes)
     track = "c0"                     # optional: the only track it is recognised on
+    requires = ["standing"]          # optional behaviour (§6.3.3): state variables that must be true,
+    forbids = ["fallen"]             #   … that must be false before it,
+    sets = ["fallen"]                #   … made true and
+    clears = ["standing"]            #   … made false when it ends
 
     [skeleton]                       # optional: joints playing each role in the clips
     pelvis = "Hips"
@@ -53,8 +58,9 @@ from doodle.errors import DoodleError
 BUILTIN = Path(__file__).resolve().parent / "builtin"
 RESERVED = {"unknown"}
 FLAGS = ("cyclic", "in_place", "jumping")
+BEHAVIOUR = ("requires", "forbids", "sets", "clears")  # §6.3.3 pre- and post-conditions
 ACTION_KEYS = {"name", "expression", "note", "flags_note", "clips", "stages", "cycle_length", "tolerance",
-               "interaction_only", "shape", "track", *FLAGS}
+               "interaction_only", "shape", "track", *BEHAVIOUR, *FLAGS}
 ROLES = ("pelvis", "chest", "head", "left_foot", "right_foot", "left_hand", "right_hand")
 
 
@@ -75,6 +81,10 @@ class ActionDef:
     interaction_only: bool = False  # its expression is a role of an interaction, never matched alone
     shape: str | None = None  # absolute path of the .npz of its examples' paths (grammar.shapes)
     track: str | None = None  # recognised on this track only (None: on any)
+    requires: tuple[str, ...] = ()  # behaviour (§6.3.3): state variables true before,
+    forbids: tuple[str, ...] = ()  # false before,
+    sets: tuple[str, ...] = ()  # made true and
+    clears: tuple[str, ...] = ()  # made false when it ends
 
 
 @dataclass(frozen=True)
@@ -92,6 +102,7 @@ class Library:
     source: str
     roles: dict = field(default_factory=dict)  # role -> joint name
     interactions: tuple[Interaction, ...] = ()
+    states: tuple[str, ...] = ()  # state variables true for every character at the start (§6.3.3)
 
     @property
     def names(self) -> list[str]:
@@ -148,7 +159,16 @@ def load_library(location) -> Library:
             raise DoodleError(f"{path}: skeleton.{role}: expected a joint name, got {joint!r}")
     interactions = tuple(_interaction(e, i, path, seen) for i, e in enumerate(data.get("interactions", []), 1))
     actions = [replace(a, roles=dict(roles)) for a in actions]
-    return Library(head["name"], tuple(actions), str(path), dict(roles), interactions)
+    states = _names(head.get("states", []), f"{path}: [library] states")
+    return Library(head["name"], tuple(actions), str(path), dict(roles), interactions, states)
+
+
+def _names(value, where: str) -> tuple[str, ...]:
+    """A list of state-variable names (§6.3.3)."""
+    if not isinstance(value, list) or not all(isinstance(v, str) and v.strip() and v == v.strip() and " " not in v
+                                              for v in value):
+        raise DoodleError(f"{where}: must be a list of state names such as [\"standing\"] (no spaces)")
+    return tuple(value)
 
 
 def _interaction(entry, i: int, path: Path, names: set) -> Interaction:
@@ -219,6 +239,11 @@ def _action(entry, i: int, path: Path) -> ActionDef:
     track = entry.get("track")
     if track is not None and (not isinstance(track, str) or not track.strip()):
         raise DoodleError(f"{where}: field 'track' must be a track name such as \"c0\"")
+    behaviour = {key: _names(entry.get(key, []), f"{where}: field {key!r}") for key in BEHAVIOUR}
+    for a, b in (("requires", "forbids"), ("sets", "clears")):
+        both = set(behaviour[a]) & set(behaviour[b])
+        if both:
+            raise DoodleError(f"{where}: state {sorted(both)[0]!r} is in both {a!r} and {b!r}")
     flags = {}
     for flag in FLAGS:
         value = entry.get(flag, False)
@@ -230,7 +255,8 @@ def _action(entry, i: int, path: Path) -> ActionDef:
                      cycle_length=float(cycle) if cycle is not None else None,
                      tolerance=float(tolerance) if tolerance is not None else None,
                      interaction_only=interaction_only,
-                     shape=str((path.parent / shape).resolve()) if shape is not None else None, track=track, **flags)
+                     shape=str((path.parent / shape).resolve()) if shape is not None else None, track=track,
+                     **behaviour, **flags)
 
 
 def builtin() -> Library:
@@ -254,7 +280,8 @@ def combine(base: Library | None, user: Library | None) -> Library:
     roles = {**base.roles, **user.roles}
     names = {i.name for i in user.interactions}
     interactions = tuple(i for i in base.interactions if i.name not in names) + user.interactions
-    return Library(f"{base.name}+{user.name}", tuple(merged), user.source, roles, interactions)
+    return Library(f"{base.name}+{user.name}", tuple(merged), user.source, roles, interactions,
+                   tuple(dict.fromkeys(base.states + user.states)))
 
 
 def _toml_string(text: str) -> str:
@@ -265,7 +292,10 @@ def format_library(library: Library, folder) -> str:
     """TOML text of a library whose clip paths are written relative to ``folder``."""
     import os
 
-    lines = ["[library]", f"name = {_toml_string(library.name)}", "format = 1", ""]
+    lines = ["[library]", f"name = {_toml_string(library.name)}", "format = 1"]
+    if library.states:
+        lines.append(f"states = [{', '.join(_toml_string(v) for v in library.states)}]")
+    lines.append("")
     if library.roles:
         lines.append("[skeleton]")
         lines += [f"{role} = {_toml_string(joint)}" for role, joint in library.roles.items()]
@@ -290,6 +320,9 @@ def format_library(library: Library, folder) -> str:
             lines.append(f"shape = {_toml_string(os.path.relpath(a.shape, folder))}")
         if a.track is not None:
             lines.append(f"track = {_toml_string(a.track)}")
+        for key in BEHAVIOUR:
+            if getattr(a, key):
+                lines.append(f"{key} = [{', '.join(_toml_string(v) for v in getattr(a, key))}]")
         if a.note:
             lines.append(f"note = {_toml_string(a.note)}")
         lines.append("")
