@@ -6,6 +6,7 @@ from dataclasses import dataclass
 
 from doodle.errors import DoodleError
 from grammar.automata import DFA, check_language, compile_expression, intersection_witness
+from grammar.constraints import parse_constraints
 from grammar.expr import parse
 from grammar.matcher import Automaton
 from grammar.shapes import ShapeSet, load_paths, shape_set
@@ -59,6 +60,10 @@ def compile_library(library: Library) -> Compiled:
         for a in inter.actions:
             if a not in names:
                 raise DoodleError(f"{library.source}: interaction {inter.name!r}: no action {a!r} in the library")
+        try:
+            parse_constraints(inter.constraints, inter.name, len(inter.actions))
+        except DoodleError as e:
+            raise DoodleError(f"{library.source}: {e}") from None
     _check_invertible(library)
     recognisable = Library(library.name, tuple(a for a in library.actions if a.expression.strip()
                                                and not a.interaction_only), library.source,
