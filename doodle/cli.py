@@ -72,8 +72,9 @@ def _each_file(args, mounts, work) -> int:
 
 def _seconds(doodle):
     """Sample index → seconds from the first sample (an end index past the last sample
-    gives the last sample's time)."""
-    t, last = doodle.t, len(doodle.t) - 1
+    gives the last sample's time); ``doodle`` may also be an array of sample times."""
+    t = doodle.t if hasattr(doodle, "t") else doodle
+    last = len(t) - 1
     return lambda i: round(float(t[min(i, last)] - t[0]), 6)
 
 
@@ -180,10 +181,11 @@ def cmd_compile(args) -> int:
                              effort_model, progress_bar("segments"))
     out = Path(args.output)
     out.mkdir(parents=True, exist_ok=True)
-    seconds = _seconds(doodle)
-    report = {"file": str(args.file), "fps": args.fps, "duration_s": round(float(doodle.t[-1]), 6),
+    report = {"file": str(args.file), "fps": args.fps,
+              "duration_s": round(float(results[0].sample_times[-1] - results[0].sample_times[0]), 6),
               "terrain": args.terrain or "flat", "tracks": {}}
     for r in results:
+        seconds = _seconds(r.sample_times)  # the compiled timeline (placement may insert walks)
         bvh = out / f"{r.track}.bvh"
         write_bvh(bvh, r.motion)
         report["tracks"][r.track] = {

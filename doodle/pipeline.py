@@ -91,6 +91,7 @@ class Animation:
     projected: np.ndarray = None  # the doodle scaled and projected, before the transfer (n, 3)
     styles: list = None  # per segment, the (L_t, L_w) applied
     efforts: list = None  # per segment, the recognised Effort (laban.classify.Quality) or None
+    sample_times: np.ndarray = None  # s: the doodle's sample times the segments index (walks inserted: longer)
 
 
 def compile_doodle(doodle: Doodle, library_dir=None, use_builtin: bool = True, params: SegmenterParams = SegmenterParams(),
@@ -125,7 +126,15 @@ def compile_doodle(doodle: Doodle, library_dir=None, use_builtin: bool = True, p
     scale = CHARACTER_HEIGHT / PROP_SIZE if scale is None else scale
     results = []
     recognised = recognize(doodle, actions, params, threshold)
-    met = meet(doodle, recognised, scale)
+    placements = {i.name: i.placement for i in library.interactions if i.placement is not None}
+    if placements:  # §6.2.2: walks to the interaction's configuration and back, time inserted
+        from doodle.placement import place
+
+        placed_doodle = place(doodle, recognised, scale, placements)
+        if placed_doodle is not doodle:
+            doodle = placed_doodle
+            recognised = recognize(doodle, actions, params, threshold)
+    met = meet(doodle, recognised, scale, skip=set(placements))
     if met is not doodle:  # characters brought within reach: read the scene again
         doodle = met
         recognised = recognize(doodle, actions, params, threshold)
@@ -200,7 +209,7 @@ def compile_doodle(doodle: Doodle, library_dir=None, use_builtin: bool = True, p
         projected = (track.p - origin) * scale
         projected[:, 1] = 0.0 if terrain is None else terrain.height(projected[:, [0, 2]])
         results.append(Animation(track.name, motion, segments, tokens, frame_path, transitions, used, rest.roles,
-                                terrain, ranges, projected, styles, efforts))
+                                terrain, ranges, projected, styles, efforts, track.t))
     _contacts(results, recognised, {i.name: i for i in library.interactions})
     return results
 
@@ -224,7 +233,7 @@ def _interaction_pairs(recognised: dict) -> list[tuple[str, object, str, object]
     return pairs
 
 
-def meet(doodle: Doodle, recognised: dict, scale: float) -> Doodle:
+def meet(doodle: Doodle, recognised: dict, scale: float, skip=frozenset()) -> Doodle:
     """Interaction placement (§6.2.2, simplified): for each recognised two-character
     interaction whose characters stand farther apart than a hand's reach, the second
     character (role 1) steps towards the first over the :data:`MEET_S` before its role
@@ -235,6 +244,8 @@ def meet(doodle: Doodle, recognised: dict, scale: float) -> Doodle:
     tracks = {tr.name: tr for tr in doodle.tracks}
     changed = False
     for ta, a, tb, b in _interaction_pairs(recognised):
+        if a.interaction in skip:  # placed by its own configuration (doodle.placement)
+            continue
         A, B = tracks[ta], tracks[tb]
         i = min(b.start, len(B.t) - 1)
         j = int(np.argmin(np.abs(A.t - B.t[i])))

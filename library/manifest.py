@@ -50,6 +50,7 @@ compiled (:mod:`grammar.library`), and joint names where clips are loaded
 
 from __future__ import annotations
 
+import math
 import tomllib
 from dataclasses import dataclass, field, replace
 from pathlib import Path
@@ -94,6 +95,7 @@ class Interaction:
     actions: tuple[str, ...]
     constraints: tuple[str, ...] = ()  # in the thesis's notation, e.g. "D(0, 1, Personal)" (§6.3)
     contact: tuple[str, ...] = ()  # (role 0's joint role, role 1's joint role) that meet, e.g. right_hand, head
+    placement: tuple[float, float, float] | None = None  # role 1's (x right, z front, turn°) from role 0 (§6.2.2)
 
 
 @dataclass(frozen=True)
@@ -179,7 +181,7 @@ def _interaction(entry, i: int, path: Path, names: set) -> Interaction:
     acts = entry.get("actions")
     if not isinstance(acts, list) or len(acts) < 2 or not all(isinstance(a, str) for a in acts):
         raise DoodleError(f"{where}: field 'actions' must list at least two action names")
-    extra = set(entry) - {"name", "actions", "note", "constraints", "contact"}
+    extra = set(entry) - {"name", "actions", "note", "constraints", "contact", "placement"}
     if extra:
         raise DoodleError(f"{where}: unknown field {sorted(extra)[0]!r}")
     constraints = entry.get("constraints", [])
@@ -189,7 +191,16 @@ def _interaction(entry, i: int, path: Path, names: set) -> Interaction:
     if not isinstance(contact, list) or (contact and (len(contact) != 2 or not all(c in ROLES for c in contact))):
         raise DoodleError(f"{where}: field 'contact' must be two joint roles (role 0's, role 1's) among "
                           f"{', '.join(ROLES)}, e.g. [\"right_hand\", \"head\"]")
-    return Interaction(entry["name"], tuple(acts), tuple(constraints), tuple(contact))
+    placement = entry.get("placement")
+    if placement is not None and (
+            not isinstance(placement, list) or len(placement) != 3
+            or not all(isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) for v in placement)):
+        raise DoodleError(f"{where}: field 'placement' must be [x, z, turn]: role 1's place to role 0's right and "
+                          "front (metres) and its heading from role 0's (degrees), e.g. [0, 0.6, 180]")
+    if placement is not None and len(acts) != 2:
+        raise DoodleError(f"{where}: field 'placement' is for two-character interactions")
+    return Interaction(entry["name"], tuple(acts), tuple(constraints), tuple(contact),
+                       tuple(float(v) for v in placement) if placement is not None else None)
 
 
 def _action(entry, i: int, path: Path) -> ActionDef:
@@ -328,5 +339,7 @@ def format_library(library: Library, folder) -> str:
             lines.append("constraints = [" + ", ".join(_toml_string(c) for c in i.constraints) + "]")
         if i.contact:
             lines.append("contact = [" + ", ".join(_toml_string(c) for c in i.contact) + "]")
+        if i.placement is not None:
+            lines.append("placement = [" + ", ".join(f"{v:g}" for v in i.placement) + "]")
         lines.append("")
     return "\n".join(lines)

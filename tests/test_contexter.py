@@ -328,3 +328,69 @@ def test_replay_command_shows_interactions(tmp_path, capsys):
     assert main(["replay", str(path), "--speed", "0"]) == 0
     out = capsys.readouterr().out
     assert "[Slap, role 0]" in out and "[Slap, role 1]" in out and "1 interaction(s)" in out
+
+
+def test_placement_walks_in_and_back_with_time_inserted(tmp_path, capsys):
+    """§6.2.2, first method: with ``placement = [0, 0.8, 180]`` Pierrot walks to 0.8 m in front
+    of Colombine, turned to face her, before the slap and back afterwards; the walks' time is
+    inserted into both characters' timelines, which stay in step."""
+    import json
+
+    from doodle.cli import main
+    from doodle.fileformat import write_doodle
+    from retarget.bvh import read_bvh
+
+    lib = tmp_path / "lib"
+    lib.mkdir()
+    (lib / "library.toml").write_text('[library]\nname = "placed"\n\n[[interactions]]\nname = "Slap"\n'
+                                      'actions = ["Slap", "Slapped"]\n'
+                                      'constraints = ["D(0, 1, Personal)", "V(0, 1, 0.5)", "V(1, 0, 0.5)"]\n'
+                                      'placement = [0, 0.8, 180]\n')
+    path = tmp_path / "slap.doodle"
+    doodle = scene(["T_N_Z", "T_Z"], [], 0.3)
+    write_doodle(path, doodle)
+    plain, placed = tmp_path / "plain", tmp_path / "placed"
+    assert main(["compile", str(path), "-o", str(plain), "--no-effort"]) == 0
+    assert main(["compile", str(path), "-o", str(placed), "--no-effort", "--library", str(lib)]) == 0
+    report = json.loads((placed / "report.json").read_text())
+    assert report["tracks"]["c0"]["frames"] == report["tracks"]["c1"]["frames"]
+    frames = {d: json.loads((d / "report.json").read_text())["tracks"]["c0"]["frames"] for d in (plain, placed)}
+    assert frames[placed] > frames[plain] + 30  # two walks of 2.5 − 0.8 m at 1 m/s, about 1.7 s each, at 30 fps
+    roles = {tr: [s for s in report["tracks"][tr]["segments"] if s["interaction"]] for tr in ("c0", "c1")}
+    assert [s["action"] for s in roles["c0"]] == ["Slap"] and [s["action"] for s in roles["c1"]] == ["Slapped"]
+    motions = [read_bvh(placed / f"{tr}.bvh", unit=1.0) for tr in ("c0", "c1")]
+    start = int(round(roles["c1"][0]["start"] * 30))
+    a, b = (m.translations[start + 2, 0] for m in motions)
+    assert np.linalg.norm((b - a)[[0, 2]]) == pytest.approx(0.8, abs=0.08)
+    first, last = (m.translations[0, 0] for m in motions), (m.translations[-1, 0] for m in motions)
+    gaps = [np.linalg.norm((y - x)[[0, 2]]) for x, y in (first, last)]
+    assert gaps[0] == pytest.approx(2.55, abs=0.2) and gaps[1] == pytest.approx(2.55, abs=0.3)  # back where it was
+    capsys.readouterr()
+
+
+def test_place_moves_turns_and_keeps_tracks_in_step():
+    from doodle.pipeline import _interaction_pairs, recognize
+    from doodle.placement import place
+
+    doodle = scene(["T_N_Z", "T_Z"], [], 0.3, q1=(0.0, 0.9239, 0.0, -0.3827))  # Pierrot turned 45° from her
+    recognised = recognize(doodle, BUILTIN)
+    assert _interaction_pairs(recognised)
+    placed = place(doodle, recognised, 8.5, {"Slap": (0.0, 0.8, 180.0)})
+    c0, c1 = placed.tracks
+    assert len(c0.t) == len(c1.t) > len(doodle.t) and np.all(np.diff(c0.t) > 0) and np.array_equal(c0.t, c1.t)
+    again = recognize(placed, BUILTIN)
+    (_, a, _, b), = _interaction_pairs(again)
+    i = b.start + 3
+    assert np.linalg.norm((c1.p[i] - c0.p[i])[[0, 2]]) == pytest.approx(0.8 / 8.5, abs=0.01)
+    assert ground_front(c1.q[i]) @ ground_front(c0.q[i]) == pytest.approx(-1.0, abs=0.02)  # face to face
+    assert np.allclose(c1.p[-1], doodle.tracks[1].p[-1]) and np.allclose(c0.p[-1], doodle.tracks[0].p[-1])
+    assert np.allclose(np.abs(c1.q[-1] @ doodle.tracks[1].q[-1]), 1.0)  # turned back as the doodle has it
+
+
+@pytest.mark.parametrize("value", ['[0, 0.6]', '"near"', '[0, 0.6, true]', '[0, 0.6, nan]'])
+def test_bad_placement_is_refused(tmp_path, value):
+    (tmp_path / "library.toml").write_text('[library]\nname = "x"\n\n[[actions]]\nname = "A"\nexpression = "T_X"\n\n'
+                                           '[[actions]]\nname = "B"\nexpression = "T_Y"\n\n[[interactions]]\n'
+                                           f'name = "AB"\nactions = ["A", "B"]\nplacement = {value}\n')
+    with pytest.raises(DoodleError, match="interaction 'AB': field 'placement' must be \\[x, z, turn\\]"):
+        load_library(tmp_path)
