@@ -43,3 +43,32 @@ def test_a_target_out_of_reach_gets_the_arm_pointing_at_it():
     after = forward_kinematics(reach(m, target, frame))[0]
     direction = (after[frame, hand] - after[frame, shoulder]) / np.linalg.norm(after[frame, hand] - after[frame, shoulder])
     assert direction[2] > 0.99
+
+
+def test_local_coordinates_are_rigid_invariants():
+    from scipy.spatial.transform import Rotation
+
+    from retarget.contact import local_coordinates
+
+    rng = np.random.default_rng(4)
+    p = np.cumsum(rng.normal(size=(20, 3)), axis=0)
+    moved = Rotation.from_rotvec([0.3, -1.2, 0.5]).apply(p) + [4.0, -2.0, 7.0]
+    for a, b in zip(local_coordinates(p), local_coordinates(moved)):
+        assert np.allclose(a, b)
+
+
+def test_arap_path_reaches_the_target_and_keeps_the_shape():
+    """Eq. 6.7 on an arc: the contact point meets the target, the window's ends stay, and the
+    neighbour-frame coordinates (α, β) change less than under a plain eased shift."""
+    from retarget.contact import arap_path, contact_weight, local_coordinates
+
+    s = np.linspace(0, np.pi, 41)
+    path = np.column_stack([np.cos(s), np.sin(s), 0.2 * s])
+    target = path[20] + [0.05, 0.08, -0.04]
+    new = arap_path(path, 20, target, 8, 32)
+    assert np.linalg.norm(new[20] - target) < 1e-3
+    assert np.array_equal(new[:9], path[:9]) and np.array_equal(new[32:], path[32:])
+    eased = path + (target - path[20]) * contact_weight(41, 20, 12)[:, None]
+    before = np.concatenate(local_coordinates(path[8:33]))
+    assert np.abs(np.concatenate(local_coordinates(new[8:33])) - before).sum() < \
+        np.abs(np.concatenate(local_coordinates(eased[8:33])) - before).sum()
