@@ -16,8 +16,10 @@ expression, recognised as that action, optionally rotated and scaled to reach a 
    above the Segmenter's ε (absolute thresholds): measured on every built-in action,
    0.7× to 3× all read back as intended; at 0.5× three of them do not.
 
-Not done: the end orientation constraint and the as-rigid-as-possible orientation smoothing
-of eq. 6.9 (the whole curve is rotated rigidly, so no discontinuity is introduced here).
+4. **End orientation and smoothing** (eq. 6.9). Rotating the whole curve introduces no
+   discontinuity inside it (its first orientation turns with it); an end orientation
+   ``goal_q`` is then met by deforming the orientation curve as rigidly as possible with
+   both ends pinned (:func:`end_orientation`), spreading the turn instead of jumping.
 """
 
 from __future__ import annotations
@@ -33,6 +35,7 @@ from grammar.library import Compiled
 from grammar.matcher import match
 
 CANDIDATES = 200  # sampled strings tried after the shortest
+LAPLACIAN = 100.0  # weight on keeping the orientation curve's bends when its end is turned (eq. 6.9)
 
 
 def intended_tokens(compiled: Compiled, action: str, seed: int = 0, threshold: float = 2.0) -> list[str]:
@@ -70,10 +73,40 @@ def minimal_smd(tokens: list[str], start_p=(0.0, 0.0, 0.0), start_q=(0.0, 0.0, 0
     return Track(name, track.t, p, q, track.valid)
 
 
-def reach(track: Track, goal) -> Track:
+def reach(track: Track, goal, goal_q=None) -> Track:
     """``track`` rotated (positions and orientations together) and scaled about its first
-    point so its last point is ``goal`` (eq. 6.8). A track that ends where it started
-    (an in-place action) cannot be aimed and is returned unchanged."""
+    point so its last point is ``goal`` (eq. 6.8) — and, with ``goal_q``, ending in that
+    orientation (:func:`end_orientation`). A track that ends where it started (an in-place
+    action) cannot be aimed: only its end orientation is set."""
+    aimed = _aim(track, goal) if goal is not None else track
+    return end_orientation(aimed, goal_q) if goal_q is not None else aimed
+
+
+def end_orientation(track: Track, goal_q) -> Track:
+    """``track`` ending in orientation ``goal_q`` (§6.4: "we assign q_n to q_goal") without
+    the jump that assigning it would make: the orientation curve, as rotation vectors from
+    the first orientation, is deformed as rigidly as possible with its first point kept and
+    its last pinned to ``goal_q`` (eq. 6.9, the discontinuity terms as pins;
+    :func:`doodle.arap.deform`, with its second differences kept too: a figurine holding
+    still has no ``(α, β)`` to keep, and the turn would stay a jump at the end). Positions are unchanged; a translation token read in the
+    turning figurine's frame may change with it, so the caller checks recognition where it
+    matters."""
+    from doodle.arap import deform
+
+    q = quat.make_continuous(quat.normalise(track.q))
+    q1 = np.broadcast_to(q[0], q.shape)
+    goal_q = quat.normalise(np.asarray(goal_q, dtype=float)[None])[0]
+    r = quat.log(quat.multiply(quat.conjugate(q1), q))
+    rel_goal = quat.multiply(quat.conjugate(q[:1]), goal_q[None])
+    rel_goal = rel_goal * np.sign(rel_goal[0, 3] or 1.0)
+    r_goal = quat.log(rel_goal)[0]
+    ramp = np.linspace(0.0, 1.0, len(r))[:, None]
+    smoothed = deform(r, {0: np.zeros(3), len(r) - 1: r_goal}, start=r + ramp * (r_goal - r[-1]), laplacian=LAPLACIAN)
+    new_q = quat.make_continuous(quat.multiply(q1, quat.exp(smoothed)))
+    return Track(track.name, track.t, track.p, new_q, track.valid, track.role, track.serial)
+
+
+def _aim(track: Track, goal) -> Track:
     c1, cn, goal = track.p[0], track.p[-1], np.asarray(goal, dtype=float)
     chord, want = cn - c1, goal - c1
     if np.linalg.norm(chord) < 1e-6 or np.linalg.norm(want) < 1e-9:
@@ -92,7 +125,8 @@ def reach(track: Track, goal) -> Track:
 
 
 def implicit_action(compiled: Compiled, action: str, start_p=(0.0, 0.0, 0.0), start_q=(0.0, 0.0, 0.0, 1.0),
-                    goal=None, rate: float = 90.0, seed: int = 0, name: str = "c0") -> Track:
-    """§6.4 end to end: a minimal SMD of ``action`` from a start pose, reaching ``goal`` if given."""
+                    goal=None, goal_q=None, rate: float = 90.0, seed: int = 0, name: str = "c0") -> Track:
+    """§6.4 end to end: a minimal SMD of ``action`` from a start pose, reaching ``goal``
+    and ending in orientation ``goal_q`` where given."""
     track = minimal_smd(intended_tokens(compiled, action, seed), start_p, start_q, rate, seed=seed, name=name)
-    return reach(track, goal) if goal is not None else track
+    return reach(track, goal, goal_q)

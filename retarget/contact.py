@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from doodle.arap import deform
 from retarget.analysis import guess_roles
 from retarget.feet import two_bone_ik
 from retarget.skeleton import Motion, forward_kinematics
@@ -43,46 +44,20 @@ def contact_weight(frames: int, frame: int, ease: int) -> np.ndarray:
     return np.where(d < 1.0, 0.5 + 0.5 * np.cos(np.pi * np.minimum(d, 1.0)), 0.0)
 
 
-GAMMA = 1e4  # weight of the contact term of eq. 6.7 against the shape terms
-STAY = 1e-3  # a little weight on staying put: (α, β) do not see a twist about A_i
-
-
-def local_coordinates(p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """``(α_i, β_i)`` of the interior points of a path (n, 3) in their neighbours' frame
-    (eq. 6.4–6.6): n − 2 values each."""
-    d = p[1:-1] - p[:-2]
-    a = p[2:] - p[:-2]
-    a = a / np.maximum(np.linalg.norm(a, axis=1, keepdims=True), 1e-9)
-    return np.sum(d * a, axis=1), np.linalg.norm(np.cross(d, a), axis=1)
-
-
 def arap_path(path: np.ndarray, frame: int, target, lo: int, hi: int) -> np.ndarray:
     """The path (n, 3) with ``path[frame]`` moved to ``target`` and the points between
-    ``lo`` and ``hi`` (kept fixed) moved as rigidly as possible (eq. 6.7)."""
-    from scipy.optimize import least_squares
-
+    ``lo`` and ``hi`` (kept fixed) moved as rigidly as possible (eq. 6.7,
+    :func:`doodle.arap.deform`)."""
     path = np.asarray(path, dtype=float)
     lo, hi = max(0, lo), min(len(path) - 1, hi)
+    out = path.copy()
     if not lo < frame < hi:
-        out = path.copy()
         out[frame] = target
         return out
     window = path[lo:hi + 1]
-    alpha0, beta0 = local_coordinates(window)
     c = frame - lo
-
-    def residuals(x):
-        p = window.copy()
-        p[1:-1] = x.reshape(-1, 3)
-        alpha, beta = local_coordinates(p)
-        return np.concatenate([alpha - alpha0, beta - beta0, np.sqrt(GAMMA) * (p[c] - target),
-                               np.sqrt(STAY) * (p[1:-1] - window[1:-1]).ravel()])
-
-    start = window[1:-1] + (np.asarray(target) - window[c]) * contact_weight(len(window), c, c if c else 1)[1:-1,
-                                                                                                           None]
-    solved = least_squares(residuals, start.ravel(), method="lm", xtol=1e-10, ftol=1e-10)
-    out = path.copy()
-    out[lo + 1:hi] = solved.x.reshape(-1, 3)
+    start = window + (np.asarray(target) - window[c]) * contact_weight(len(window), c, c)[:, None]
+    out[lo:hi + 1] = deform(window, {c: np.asarray(target, dtype=float)}, start)
     return out
 
 

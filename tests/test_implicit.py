@@ -48,3 +48,27 @@ def test_reach_rotates_and_scales_about_the_start():
     assert np.allclose(np.linalg.norm(moved.q, axis=1), 1.0)
     with pytest.raises(DoodleError, match="no action 'Fly'"):
         intended_tokens(COMPILED, "Fly")
+
+
+@pytest.mark.parametrize("action, turn", [("Walk", 60.0), ("Walk", -90.0), ("Jump", 45.0), ("Side Walk Left", 30.0)])
+def test_end_orientation_is_met_without_a_jump(action, turn):
+    """§6.4, eq. 6.9: the generated doodle ends in the orientation asked for, turning there
+    gradually (no step between samples larger than the curve's own), and is still read as
+    the action."""
+    from scipy.spatial.transform import Rotation
+
+    from doodle.model import Doodle
+    from doodle.pipeline import recognize
+    from grammar.implicit import end_orientation
+
+    track = implicit_action(COMPILED, action)
+    goal_q = (Rotation.from_euler("y", turn, degrees=True) * Rotation.from_quat(track.q[-1])).as_quat()
+    turned = end_orientation(track, goal_q)
+    assert abs(abs(turned.q[-1] @ goal_q) - 1.0) < 1e-6 and np.allclose(turned.q[0], track.q[0])
+    assert np.allclose(turned.p, track.p)
+    step = lambda q: np.max(np.arccos(np.clip(np.abs(np.sum(q[1:] * q[:-1], axis=1)), -1, 1)) * 2)
+    jumped = track.q.copy()
+    jumped[-1] = goal_q
+    assert step(turned.q) < step(track.q) + np.radians(abs(turn)) / 10 < step(jumped)
+    segs = recognize(Doodle((turned,), 90.0), COMPILED)["c0"][1]
+    assert [s.action for s in segs if s.action not in ("Idle", "unknown")] == [action]
