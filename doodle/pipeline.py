@@ -126,7 +126,8 @@ def compile_doodle(doodle: Doodle, library_dir=None, use_builtin: bool = True, p
     scale = CHARACTER_HEIGHT / PROP_SIZE if scale is None else scale
     results = []
     recognised = recognize(doodle, actions, params, threshold)
-    placements = {i.name: i.placement for i in library.interactions if i.placement is not None}
+    placements = {i.name: i.placement if i.placement is not None else _pair_placement(i)
+                  for i in library.interactions if i.placement is not None or i.pair}
     if placements:  # §6.2.2: walks to the interaction's configuration and back, time inserted
         from doodle.placement import place
 
@@ -212,6 +213,21 @@ def compile_doodle(doodle: Doodle, library_dir=None, use_builtin: bool = True, p
                                 terrain, ranges, projected, styles, efforts, track.t))
     _contacts(results, recognised, {i.name: i for i in library.interactions})
     return results
+
+
+def _pair_placement(interaction) -> tuple[float, float, float]:
+    """The placement an interaction's two-character clip shows at its first frame."""
+    from retarget.bvh import read_bvh
+    from retarget.pair import placement
+
+    motions = []
+    for path in interaction.pair:
+        try:
+            motions.append(read_bvh(path))
+        except OSError as e:
+            raise DoodleError(f"{path}: cannot read the two-character clip of interaction "
+                              f"{interaction.name!r}: {e.strerror or e}") from None
+    return placement(*motions)
 
 
 MEET_DISTANCE = 0.6  # m between two interacting characters' roots: within a hand's reach (§6.2.2)

@@ -96,6 +96,7 @@ class Interaction:
     constraints: tuple[str, ...] = ()  # in the thesis's notation, e.g. "D(0, 1, Personal)" (§6.3)
     contact: tuple[str, ...] = ()  # (role 0's joint role, role 1's joint role) that meet, e.g. right_hand, head
     placement: tuple[float, float, float] | None = None  # role 1's (x right, z front, turn°) from role 0 (§6.2.2)
+    pair: tuple[str, ...] = ()  # absolute paths of a two-character clip: one BVH per role, one timeline
 
 
 @dataclass(frozen=True)
@@ -181,7 +182,7 @@ def _interaction(entry, i: int, path: Path, names: set) -> Interaction:
     acts = entry.get("actions")
     if not isinstance(acts, list) or len(acts) < 2 or not all(isinstance(a, str) for a in acts):
         raise DoodleError(f"{where}: field 'actions' must list at least two action names")
-    extra = set(entry) - {"name", "actions", "note", "constraints", "contact", "placement"}
+    extra = set(entry) - {"name", "actions", "note", "constraints", "contact", "placement", "pair"}
     if extra:
         raise DoodleError(f"{where}: unknown field {sorted(extra)[0]!r}")
     constraints = entry.get("constraints", [])
@@ -199,8 +200,13 @@ def _interaction(entry, i: int, path: Path, names: set) -> Interaction:
                           "front (metres) and its heading from role 0's (degrees), e.g. [0, 0.6, 180]")
     if placement is not None and len(acts) != 2:
         raise DoodleError(f"{where}: field 'placement' is for two-character interactions")
+    pair = entry.get("pair", [])
+    if not isinstance(pair, list) or (pair and (len(pair) != 2 or not all(isinstance(c, str) and c for c in pair))):
+        raise DoodleError(f"{where}: field 'pair' must be two BVH files, role 0's and role 1's, of one "
+                          "two-character clip")
     return Interaction(entry["name"], tuple(acts), tuple(constraints), tuple(contact),
-                       tuple(float(v) for v in placement) if placement is not None else None)
+                       tuple(float(v) for v in placement) if placement is not None else None,
+                       tuple(str((path.parent / c).resolve()) for c in pair))
 
 
 def _action(entry, i: int, path: Path) -> ActionDef:
@@ -341,5 +347,7 @@ def format_library(library: Library, folder) -> str:
             lines.append("contact = [" + ", ".join(_toml_string(c) for c in i.contact) + "]")
         if i.placement is not None:
             lines.append("placement = [" + ", ".join(f"{v:g}" for v in i.placement) + "]")
+        if i.pair:
+            lines.append("pair = [" + ", ".join(_toml_string(os.path.relpath(c, folder)) for c in i.pair) + "]")
         lines.append("")
     return "\n".join(lines)

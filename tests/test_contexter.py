@@ -394,3 +394,58 @@ def test_bad_placement_is_refused(tmp_path, value):
                                            f'name = "AB"\nactions = ["A", "B"]\nplacement = {value}\n')
     with pytest.raises(DoodleError, match="interaction 'AB': field 'placement' must be \\[x, z, turn\\]"):
         load_library(tmp_path)
+
+
+def _pair_clip(folder, gap=0.9):
+    """A two-character Slap clip: the built-in Slap, and Slapped standing ``gap`` m in
+    front of it, turned to face it."""
+    from scipy.spatial.transform import Rotation
+
+    from retarget.bvh import write_bvh
+    from retarget.clips import load_clips
+    from retarget.pair import heading
+
+    clips = load_clips(builtin())
+    a, b = clips["Slap"][0].motion, clips["Slapped"][0].motion
+    fa, fb = heading(a.rotations[0, 0]), heading(b.rotations[0, 0])
+    yaw = Rotation.from_euler("y", np.arctan2(-fa[0], -fa[2]) - np.arctan2(fb[0], fb[2]))
+    rots, trans = b.rotations.copy(), b.translations.copy()
+    rots[:, 0] = (yaw * Rotation.from_quat(rots[:, 0])).as_quat()
+    root = yaw.apply(trans[:, 0] - trans[0, 0]) + trans[0, 0]
+    target = a.translations[0, 0] + gap * fa
+    trans[:, 0] = root + (target - trans[0, 0]) * [1.0, 0.0, 1.0]
+    write_bvh(folder / "pair_slap.bvh", a)
+    write_bvh(folder / "pair_slapped.bvh", replace(b, rotations=rots, translations=trans))
+    return a, replace(b, rotations=rots, translations=trans)
+
+
+def test_placement_read_from_a_two_character_clip(tmp_path):
+    """§6.2.2: the characters' relative placement at the first frame of a stored
+    two-character clip (one BVH per character) places them when the interaction is played."""
+    import json
+
+    from doodle.cli import main
+    from doodle.fileformat import write_doodle
+    from retarget.bvh import read_bvh
+    from retarget.pair import placement
+
+    lib = tmp_path / "lib"
+    lib.mkdir()
+    first, second = _pair_clip(lib)
+    x, z, turn = placement(first, second)
+    assert x == pytest.approx(0.0, abs=1e-6) and z == pytest.approx(0.9, abs=1e-6) and abs(turn) == pytest.approx(180)
+    (lib / "library.toml").write_text('[library]\nname = "paired"\n\n[[interactions]]\nname = "Slap"\n'
+                                      'actions = ["Slap", "Slapped"]\n'
+                                      'constraints = ["D(0, 1, Personal)", "V(0, 1, 0.5)", "V(1, 0, 0.5)"]\n'
+                                      'pair = ["pair_slap.bvh", "pair_slapped.bvh"]\n')
+    assert load_library(lib).interactions[0].pair == (str(lib / "pair_slap.bvh"), str(lib / "pair_slapped.bvh"))
+    path = tmp_path / "slap.doodle"
+    write_doodle(path, scene(["T_N_Z", "T_Z"], [], 0.3))
+    out = tmp_path / "out"
+    assert main(["compile", str(path), "-o", str(out), "--no-effort", "--library", str(lib)]) == 0
+    report = json.loads((out / "report.json").read_text())
+    role = [s for s in report["tracks"]["c1"]["segments"] if s["interaction"]][0]
+    motions = [read_bvh(out / f"{tr}.bvh", unit=1.0) for tr in ("c0", "c1")]
+    k = int(round(role["start"] * 30)) + 2
+    assert np.linalg.norm((motions[1].translations[k, 0] - motions[0].translations[k, 0])[[0, 2]]) == \
+        pytest.approx(0.9, abs=0.1)
