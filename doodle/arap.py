@@ -11,6 +11,7 @@ import numpy as np
 
 GAMMA = 1e4  # weight of a pinned point against the shape terms
 STAY = 1e-3  # a little weight on staying put: (α, β) do not see a twist about A_i
+MAX_POINTS = 32  # longer curves are solved on this many of their points
 
 
 def local_coordinates(p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -34,6 +35,16 @@ def deform(curve: np.ndarray, pins: dict, start: np.ndarray | None = None, lapla
 
     curve = np.asarray(curve, dtype=float)
     n = len(curve)
+    if n > MAX_POINTS:  # solved on a coarse copy, the displacement spread back over every point
+        keep = np.unique(np.concatenate([np.round(np.linspace(0, n - 1, MAX_POINTS)).astype(int),
+                                         np.array(sorted(pins), dtype=int)]))
+        coarse = deform(curve[keep], {int(np.searchsorted(keep, k)): v for k, v in pins.items()},
+                        None if start is None else np.asarray(start, dtype=float)[keep], laplacian)
+        moved = coarse - curve[keep]
+        out = curve + np.column_stack([np.interp(np.arange(n), keep, moved[:, c]) for c in range(3)])
+        for k, v in pins.items():
+            out[k] = v
+        return out
     if n < 3:
         out = curve.copy()
         for k, v in pins.items():
@@ -58,7 +69,8 @@ def deform(curve: np.ndarray, pins: dict, start: np.ndarray | None = None, lapla
                                np.sqrt(STAY) * (p[1:-1] - curve[1:-1]).ravel(), smooth])
 
     x0 = (curve if start is None else np.asarray(start, dtype=float))[1:-1]
-    solved = least_squares(residuals, x0.ravel(), method="lm", xtol=1e-10, ftol=1e-10)
+    solved = least_squares(residuals, x0.ravel(), method="lm", xtol=1e-5, ftol=1e-5)
     out = fixed.copy()
     out[1:-1] = solved.x.reshape(-1, 3)
     return out
+

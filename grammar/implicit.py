@@ -88,9 +88,10 @@ def end_orientation(track: Track, goal_q) -> Track:
     the first orientation, is deformed as rigidly as possible with its first point kept and
     its last pinned to ``goal_q`` (eq. 6.9, the discontinuity terms as pins;
     :func:`doodle.arap.deform`, with its second differences kept too: a figurine holding
-    still has no ``(α, β)`` to keep, and the turn would stay a jump at the end). Positions are unchanged; a translation token read in the
-    turning figurine's frame may change with it, so the caller checks recognition where it
-    matters."""
+    still has no ``(α, β)`` to keep, and the turn would stay a jump at the end). The turn is
+    made over the closing pause where the doodle has one (a minimal SMD does), so the
+    action's own tokens — translations read in the figurine's frame — are unchanged;
+    without one it is spread over the whole curve. Positions are unchanged."""
     from doodle.arap import deform
 
     q = quat.make_continuous(quat.normalise(track.q))
@@ -100,8 +101,19 @@ def end_orientation(track: Track, goal_q) -> Track:
     rel_goal = quat.multiply(quat.conjugate(q[:1]), goal_q[None])
     rel_goal = rel_goal * np.sign(rel_goal[0, 3] or 1.0)
     r_goal = quat.log(rel_goal)[0]
-    ramp = np.linspace(0.0, 1.0, len(r))[:, None]
-    smoothed = deform(r, {0: np.zeros(3), len(r) - 1: r_goal}, start=r + ramp * (r_goal - r[-1]), laplacian=LAPLACIAN)
+    # the turn is made in the closing pause where there is one: a figurine turning while it
+    # travels would change how its translations read in its own frame (tokens)
+    from doodle.segmenter import tokenize
+
+    rate = (len(track.t) - 1) / max(float(track.t[-1] - track.t[0]), 1e-9)
+    tokens = tokenize(track, rate)
+    k0 = tokens[-1].start if len(tokens) > 1 and tokens[-1].name == "T_STILL" and \
+        tokens[-1].start + 3 < len(r) - 1 else 0
+    part = r[k0:]
+    ramp = np.linspace(0.0, 1.0, len(part))[:, None]
+    smoothed = r.copy()
+    smoothed[k0:] = deform(part, {0: part[0], len(part) - 1: r_goal}, start=part + ramp * (r_goal - part[-1]),
+                           laplacian=LAPLACIAN)
     new_q = quat.make_continuous(quat.multiply(q1, quat.exp(smoothed)))
     return Track(track.name, track.t, track.p, new_q, track.valid, track.role, track.serial)
 
