@@ -285,6 +285,10 @@ class LiveContexter:
             if key not in self._reported and (final or decided >= f.t1):
                 self._reported.add(key)
                 out.append((f, segs))
+        if not final:  # a segment every track has decided past can join nothing new: forget it
+            for name, pool in self.pools.items():
+                track = self.doodle.track(name)
+                self.pools[name] = [s for s in pool if _time(track, s.end - 1) >= decided]
         return out
 
 
