@@ -126,7 +126,8 @@ def cmd_recognize(args) -> int:
             ]
             print(json.dumps({"file": str(path), "segments": segments}), flush=True)
             return
-        print(f"{path}  ({doodle.t[-1]:.2f} s, {len(compiled.library.actions)} actions)")
+        n = len(compiled.library.actions)
+        print(f"{path}  ({doodle.t[-1]:.2f} s, {n} action{'s' if n != 1 else ''} in the library)")
         for name, (toks, segs) in result.items():
             print(f"  {name}: {', '.join(_named(s) for s in segs) or '(nothing)'}")
             if args.verbose:
