@@ -23,6 +23,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation, Slerp
 
 from doodle.model import Doodle, Track
+from doodle.synth import min_jerk
 
 WALK_SPEED = 1.0  # m/s in character space: an unhurried walk
 MIN_WALK_S = 0.5  # s: the shortest inserted walk
@@ -70,7 +71,7 @@ def _place_one(doodle: Doodle, ta: str, a, tb: str, b, scale: float, placement) 
     q_role = (twist * Rotation.from_quat(B.q[i0:i1 + 1])).as_quat()
     moved = replace(B, p=np.concatenate([B.p[:i0], B.p[i0:i1 + 1] + shift, B.p[i1 + 1:]]),
                     q=np.concatenate([B.q[:i0], q_role, B.q[i1 + 1:]]))
-    u = _min_jerk(np.linspace(0.0, 1.0, n))
+    u = min_jerk(np.linspace(0.0, 1.0, n))
     heading_in = _facing(B.q[i0], shift)  # walking forwards, turned to where it goes
     heading_out = _facing(q_role[-1], -shift)
     walk_in = (B.p[i0] + u[:, None] * shift, _turns(B.q[i0], heading_in, q_role[0], n))
@@ -118,19 +119,13 @@ def _turns(q_from, q_walk, q_to, n: int) -> np.ndarray:
     fifth, walk, turn to the final heading over its last fifth (the thesis's π-rotated way
     back, §6.2.2)."""
     k = max(1, n // 5)
-    u = _min_jerk(np.linspace(0.0, 1.0, k))
+    u = min_jerk(np.linspace(0.0, 1.0, k))
     return np.concatenate([_slerp(q_from, q_walk, u), np.repeat(np.asarray(q_walk)[None], n - 2 * k, axis=0),
                            _slerp(q_walk, q_to, u)])
 
 
 def _slerp(q0, q1, u) -> np.ndarray:
     return Slerp([0.0, 1.0], Rotation.from_quat([q0, q1]))(np.clip(u, 0.0, 1.0)).as_quat()
-
-
-def _min_jerk(u):
-    from doodle.synth import min_jerk
-
-    return min_jerk(u)
 
 
 def _wrap(angle: float) -> float:

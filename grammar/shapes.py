@@ -73,11 +73,6 @@ def dtw_costs(x: np.ndarray, templates: np.ndarray) -> np.ndarray:
     return out[0] if single else out
 
 
-def shape_distance(x: np.ndarray, templates: np.ndarray) -> float:
-    """The smallest per-step DTW cost of directions x to any template's."""
-    return float(dtw_costs(x, templates).min())
-
-
 # --- a library's shapes, and segments refined by them ------------------------------------
 
 REACH = 3  # tokens a refined segment may extend past the Matcher's at either end
@@ -185,11 +180,8 @@ def refine(segments: list, tokens: list, p: np.ndarray, valid: np.ndarray, shape
            track: str | None = None) -> list:
     """Batch form of :class:`Refiner`: every segment of a track re-decided."""
     refiner = Refiner(shapes, p, valid, track)
-    out = []
-    for token in tokens:
-        refiner.tokens.append(token)
-        out += refiner.push([])
-    return out + refiner.push(segments) + refiner.close()
+    refiner.tokens.extend(tokens)
+    return refiner.push(segments) + refiner.close()
 
 
 class Refiner:
@@ -203,8 +195,12 @@ class Refiner:
     gesture in two) — no window starting or ending on a pause or reaching back into what
     is already decided, is scored for every shaped action as ``edits + WEIGHT × shape distance``; the
     best window and action win — or, when its shape distance is over that action's
-    :attr:`ShapeSet.reject`, the segment is unknown. Tokens a window takes from the next
-    segment are taken from it; tokens it gives up are unknown. Other segments pass through
+    :attr:`ShapeSet.reject`, the segment is unknown. A window may also take back up to
+    :data:`UNKNOWN_REACH` tokens of the unknown run before it, or reach as far into the
+    unknown run after it. Tokens a window takes from the next segment are taken from it;
+    tokens it gives up are unknown. An unknown run of :data:`SPOT_TOKENS` to
+    :data:`SPOT_MAX` tokens is searched the same way and reported as a learned action when
+    one fits within :data:`SPOT` of its rejection distance. Other segments pass through
     (less any tokens taken). The batch form (:func:`refine`) is this run to the end, so
     streaming equals batch.
 
@@ -267,8 +263,6 @@ class Refiner:
             elif after is not None and after.action == UNKNOWN:
                 ends.append((seg.stop, min(after.stop, seg.stop + UNKNOWN_REACH)))
             best = self._best(range(max(lowest, seg.first - back), min(seg.stop, seg.first + TRIM + 1)), ends, known)
-            if best is None:
-                return self._emit(UNKNOWN, first, seg.stop, False, None)
         else:
             return self._emit(seg.action, first, seg.stop, seg.exact, seg.distance)
         if best is None:

@@ -136,7 +136,7 @@ def test_two_tracks_learn_an_expression_pair(tmp_path, capsys):
     assert main(["learn", "Golf", *files[:3], "--library", str(lib), "--convention", "unity",
                  "--tracks", "c0,c1"]) == 0
     library = load_library(lib)
-    assert library.names == ["Golf.c0", "Golf.c1"]
+    assert [(a.name, a.track) for a in library.actions] == [("Golf.c0", "c0"), ("Golf.c1", "c1")]  # bound
     assert library.interactions[0].name == "Golf" and library.interactions[0].actions == ("Golf.c0", "Golf.c1")
     assert all(a.tolerance >= 2 for a in library.actions)
     out = capsys.readouterr().out
@@ -148,6 +148,7 @@ def test_two_tracks_learn_an_expression_pair(tmp_path, capsys):
     segs = json.loads(capsys.readouterr().out)["segments"]
     assert {(s["track"], s["action"], s["interaction"]) for s in segs if s["interaction"]} == \
         {("c0", "Golf.c0", "Golf"), ("c1", "Golf.c1", "Golf")}
+    assert all(s["action"] in ("unknown", f"Golf.{s['track']}") for s in segs)  # never the other hand's
 
 
 def test_learn_command_bad_input(tmp_path, capsys):
