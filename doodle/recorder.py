@@ -108,8 +108,7 @@ class _Live:
             except DoodleError:  # fewer than two samples since a restart, or never tracked
                 flush = False
         if not flush:
-            pending = self.segmenter.pending
-            tokens = [pending] if pending is not None else []
+            tokens = self.segmenter.cut()
         self._read(tokens, close=True)
 
     def _read(self, tokens, close: bool = False) -> None:

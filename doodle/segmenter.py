@@ -32,8 +32,10 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from doodle import quat
+from doodle.deliberate import Absorber, absorb, extent
 from doodle.errors import DoodleError
 from doodle.frame import local_velocities, local_velocity
+from doodle.levelling import IDENTITY, level, levels, unrotate
 from doodle.model import Doodle, Track
 from doodle.repair import GapFiller, check_samples, fill_gaps
 from doodle.smoothing import StreamingSmoother, laplacian_kernel, savgol_kernel, smooth
@@ -49,11 +51,18 @@ class SegmenterParams:
     smooth_s: float = 0.03  # Laplacian: temporal std of the kernel, seconds
     savgol_window_s: float = 0.1  # Savitzky–Golay: window length, seconds (cubic)
     max_gap: float = 0.5  # seconds of lost tracking repaired by interpolation
+    # deliberate motion (doodle.deliberate, doodle.levelling)
+    pause_s: float = 0.12  # a still between movements shorter than this is a hold, not a pause
+    significance: float = 0.2  # a token covering less than this share of its neighbours' extent is a blip
+    min_extent_s: float = 0.2  # ... as is one covering less than eps × this (metres)
+    window: int = 2  # neighbours looked at on each side for significance
+    level_cap: float = 35.0  # degrees: a rest tilted less than this is stood upright (0: no levelling)
 
     def __post_init__(self) -> None:
         if self.smoothing not in ("laplacian", "savgol"):
             raise DoodleError(f"smoothing must be 'laplacian' or 'savgol', not {self.smoothing!r}")
-        for field in ("eps", "theta", "alpha_s", "smooth_s", "savgol_window_s", "max_gap"):
+        for field in ("eps", "theta", "alpha_s", "smooth_s", "savgol_window_s", "max_gap", "pause_s",
+                      "significance", "min_extent_s", "window", "level_cap"):
             value = getattr(self, field)
             if not (np.isfinite(value) and value >= 0):
                 raise DoodleError(f"segmenter parameter {field} must be a finite number ≥ 0, not {value!r}")
@@ -67,21 +76,39 @@ class SegmenterParams:
             return savgol_kernel(self.savgol_window_s, rate)
         return laplacian_kernel(self.smooth_s, rate)
 
+    def absorber(self, rate: float) -> Absorber:
+        """The stage that absorbs holds and blips (:mod:`doodle.deliberate`)."""
+        return Absorber(rate, self.pause_s, self.significance, self.eps * self.min_extent_s, int(self.window))
+
+    @property
+    def cos_cap(self) -> float | None:
+        """cos of the levelling cap, None when levelling is off."""
+        return math.cos(math.radians(self.level_cap)) if self.level_cap > 0 else None
+
     def scaled(self, s: float) -> "SegmenterParams":
         """Thresholds for a doodle uniformly scaled by ``s``."""
         return replace(self, eps=self.eps * s, theta=self.theta * s)
 
 
-def sample_codes(v: np.ndarray, w: np.ndarray, params: SegmenterParams) -> np.ndarray:
-    """Bin code per velocity sample (vectorised; see :func:`sample_code`)."""
-    theta2, eps2 = params.theta * params.theta, params.eps * params.eps
+def _norms(v: np.ndarray, w: np.ndarray, theta2: float) -> tuple[np.ndarray, np.ndarray]:
     v2 = v[:, 0] * v[:, 0] + v[:, 1] * v[:, 1] + v[:, 2] * v[:, 2]
-    tw2 = theta2 * (w[:, 0] * w[:, 0] + w[:, 1] * w[:, 1] + w[:, 2] * w[:, 2])
+    return v2, theta2 * (w[:, 0] * w[:, 0] + w[:, 1] * w[:, 1] + w[:, 2] * w[:, 2])
+
+
+def sample_codes(v: np.ndarray, w: np.ndarray, params: SegmenterParams, c: np.ndarray | None = None) -> np.ndarray:
+    """Bin code per velocity sample (vectorised; see :func:`sample_code`); directions are
+    read in the frames turned by the levelling ``c`` (n, 4) when given."""
+    theta2, eps2 = params.theta * params.theta, params.eps * params.eps
+    v2, tw2 = _norms(v, w, theta2)
+    if c is not None:
+        cx, cy, cz, cw = c[:, 0], c[:, 1], c[:, 2], c[:, 3]
+        v = np.column_stack(unrotate(cx, cy, cz, cw, v[:, 0], v[:, 1], v[:, 2]))
+        w = np.column_stack(unrotate(cx, cy, cz, cw, w[:, 0], w[:, 1], w[:, 2]))
     codes = np.where(v2 >= tw2, T_BASE + direction_indices(v), R_BASE + direction_indices(w))
     return np.where(v2 + tw2 <= eps2, STILL, codes)
 
 
-def sample_code(vel: tuple, theta2: float, eps2: float) -> int:
+def sample_code(vel: tuple, theta2: float, eps2: float, c: tuple = IDENTITY) -> int:
     """Bin code of one ``(vx, vy, vz, ωx, ωy, ωz)``; the arithmetic of :func:`sample_codes`."""
     vx, vy, vz, wx, wy, wz = vel
     v2 = vx * vx + vy * vy + vz * vz
@@ -89,8 +116,8 @@ def sample_code(vel: tuple, theta2: float, eps2: float) -> int:
     if v2 + tw2 <= eps2:
         return STILL
     if v2 >= tw2:
-        return T_BASE + direction_index(vx, vy, vz)
-    return R_BASE + direction_index(wx, wy, wz)
+        return T_BASE + direction_index(*unrotate(*c, vx, vy, vz))
+    return R_BASE + direction_index(*unrotate(*c, wx, wy, wz))
 
 
 def debounce(codes: np.ndarray, alpha: int) -> list[Token]:
@@ -121,17 +148,30 @@ def smoothed_track(track: Track, rate: float, params: SegmenterParams, source: s
     return rows
 
 
+def codes_of_rows(rows: np.ndarray, rate: float, params: SegmenterParams) -> np.ndarray:
+    """Bin code of every smoothed sample (sample 0 takes sample 1's bin), directions read in
+    the frame levelled at the latest rest (:mod:`doodle.levelling`)."""
+    v, w = local_velocities(rows[:, 0], rows[:, 1:4], rows[:, 4:], rate)
+    v, w = np.vstack([v[:1], v]), np.vstack([w[:1], w])
+    c = None
+    if params.cos_cap is not None and len(rows):
+        v2, tw2 = _norms(v, w, params.theta * params.theta)
+        c = levels(rows[:, 4:], v2 + tw2 <= params.eps * params.eps, params.alpha(rate), params.cos_cap)
+    return sample_codes(v, w, params, c)
+
+
 def sample_codes_of(track: Track, rate: float, params: SegmenterParams, source: str = "<memory>") -> np.ndarray:
     """Bin code of every sample of a track (sample 0 takes sample 1's bin)."""
-    rows = smoothed_track(track, rate, params, source)
-    v, w = local_velocities(rows[:, 0], rows[:, 1:4], rows[:, 4:], rate)
-    codes = sample_codes(v, w, params)
-    return np.concatenate([codes[:1], codes])
+    return codes_of_rows(smoothed_track(track, rate, params, source), rate, params)
 
 
 def tokenize(track: Track, rate: float, params: SegmenterParams = SegmenterParams(), source: str = "<memory>") -> list[Token]:
     """Batch Segmenter: the tokens of one track sampled at nominal ``rate`` Hz."""
-    return debounce(sample_codes_of(track, rate, params, source), params.alpha(rate))
+    rows = smoothed_track(track, rate, params, source)
+    raw = debounce(codes_of_rows(rows, rate, params), params.alpha(rate))
+    last = len(rows) - 1
+    extents = [extent(rows[k.start].tolist(), rows[min(k.end, last)].tolist(), params.theta) for k in raw]
+    return absorb(raw, extents, params.absorber(rate))
 
 
 def tokenize_doodle(doodle: Doodle, params: SegmenterParams = SegmenterParams()) -> dict[str, list[Token]]:
@@ -164,6 +204,11 @@ class Segmenter:
         self._run_code = -1
         self._run_start = 0
         self._run_len = 0
+        self._cos_cap = params.cos_cap
+        self._level = IDENTITY  # levelling from the latest rest
+        self._still_run = 0
+        self._row0 = self._cur_row = self._run_row = self._last_row = None  # rows at token boundaries
+        self._absorber = params.absorber(rate)
 
     @property
     def pending(self) -> Token | None:
@@ -211,10 +256,17 @@ class Segmenter:
             self._smooth(sample, out)
         for row in self._smoother.close():
             self._classify(row, out)
+        return out + self.cut()
+
+    def cut(self) -> list[Token]:
+        """End the stream where classification stands, without the samples still being
+        smoothed (tracking lost for good): the tokens held back and the one in progress."""
+        out: list[Token] = []
         if self._cur is not None:
-            out.append(Token(NAMES[self._cur], self._cur_start, self._n))
+            out += self._absorber.push(Token(NAMES[self._cur], self._cur_start, self._n),
+                                       extent(self._cur_row, self._last_row, self.params.theta))
             self._cur = None
-        return out
+        return out + self._absorber.close()
 
     def _smooth(self, sample: tuple, out: list[Token]) -> None:
         t, (px, py, pz), (qx, qy, qz, qw) = sample
@@ -233,21 +285,38 @@ class Segmenter:
         prev, self._prev = self._prev, cur
         if prev is None:
             return
-        code = sample_code(local_velocity(prev, cur, self.rate), self._theta2, self._eps2)
+        vel = local_velocity(prev, cur, self.rate)
         if self._n == 0:
-            self._step(code, out)  # sample 0 takes sample 1's bin
-        self._step(code, out)
+            self._sample(vel, prev, out)  # sample 0 takes sample 1's bin
+        self._sample(vel, cur, out)
 
-    def _step(self, code: int, out: list[Token]) -> None:
+    def _sample(self, vel: tuple, row: tuple, out: list[Token]) -> None:
+        code = sample_code(vel, self._theta2, self._eps2, self._level)
+        self._step(code, row, out)
+        if self._cos_cap is None:
+            return
+        vx, vy, vz, wx, wy, wz = vel
+        still = vx * vx + vy * vy + vz * vz + self._theta2 * (wx * wx + wy * wy + wz * wz) <= self._eps2
+        self._still_run = self._still_run + 1 if still else 0
+        if self._still_run >= self.alpha:  # at rest: the world's up says where the prop's is
+            c, ok = level(row[4], row[5], row[6], row[7], self._cos_cap)
+            self._level = c if ok else IDENTITY
+
+    def _step(self, code: int, row: tuple, out: list[Token]) -> None:
         i = self._n
         self._n += 1
+        self._last_row = row
+        if i == 0:
+            self._row0 = row
         if code == self._run_code:
             self._run_len += 1
         else:
             self._run_code, self._run_start, self._run_len = code, i, 1
+            self._run_row = row
         if self._run_len == self.alpha:
             if self._cur is None:
-                self._cur, self._cur_start = code, 0
+                self._cur, self._cur_start, self._cur_row = code, 0, self._row0
             elif code != self._cur:
-                out.append(Token(NAMES[self._cur], self._cur_start, self._run_start))
-                self._cur, self._cur_start = code, self._run_start
+                raw = Token(NAMES[self._cur], self._cur_start, self._run_start)
+                out += self._absorber.push(raw, extent(self._cur_row, self._run_row, self.params.theta))
+                self._cur, self._cur_start, self._cur_row = code, self._run_start, self._run_row

@@ -1,11 +1,15 @@
 """Automata for action expressions: Thompson NFA → compacted DFA → minimal DFA (§4.2.4).
 
 The Matcher reads the *compacted* token stream (no token twice in a row), and every token of
-an expression is "effectively repeatable" (§4.2.3: the thesis removes the ``+``). So the
-language an action recognises is ``compact(L)``: the compacted forms of the strings of its
-expression. The subset construction below builds it directly: reading token ``a`` from a
-set of NFA states moves through one *or more* ``a`` transitions, and a DFA state remembers
-the last token so that a repeat is rejected. ``T_Z T_Z`` therefore recognises ``T_Z``.
+an expression is "effectively repeatable" (§4.2.3: the thesis removes the ``+`` and
+enumerates the expression's strings of non-repeating tokens, one token per group). So the
+language an action recognises is the strings of its expression that have no token twice in
+a row: ``L ∩ NoRepeat``. Each group the expression requires reads its *own* run — two
+neighbouring groups never share one (``(T_Y)+ (T_N_Y | T_Y)+`` does not read a lone
+``T_Y``; reading it that way let Pick up swallow a Jump whose apex moves forward) — while a
+group's own repetition still alternates its options (``(T_Z | T_X_Z)+`` reads
+``T_Z T_X_Z T_Z``). The subset construction below builds it directly: a DFA state remembers
+the last token so that a repeat is rejected.
 
 A DFA here is a transition table over all token codes (``-1`` rejects) with start state 0
 and an accept mask; :func:`minimise` merges equivalent states (Moore's partition
@@ -98,14 +102,6 @@ class _NFA:
     def move(self, states, code: int) -> frozenset:
         return self.closure({t for s in states for c, t in self.moves[s] if c == code})
 
-    def move_plus(self, states, code: int) -> frozenset:
-        """States reached by reading ``code`` one or more times (a compacted token)."""
-        reached = frontier = self.move(states, code)
-        while frontier:
-            frontier = self.move(frontier, code) - reached
-            reached = reached | frontier
-        return reached
-
 
 def compile_expression(node) -> DFA:
     """Minimal DFA of the compacted language of an expression tree."""
@@ -121,7 +117,7 @@ def compile_expression(node) -> DFA:
         for code in SYMBOLS:
             if code == last:
                 continue
-            nxt = nfa.move_plus(states, code)
+            nxt = nfa.move(states, code)
             if not nxt:
                 continue
             key = (nxt, code)
@@ -171,7 +167,8 @@ def check_language(dfa: DFA, action: str) -> None:
         raise DoodleError(f"action {action!r}: the expression also matches no tokens at all; "
                           f"make at least one part mandatory (+ instead of *)")
     if not dfa.accept.any():
-        raise DoodleError(f"action {action!r}: the expression matches no compacted token string")
+        raise DoodleError(f"action {action!r}: the expression matches no compacted token string "
+                          f"(each group reads its own run: neighbouring groups cannot both need the same token)")
 
 
 def intersection_witness(a: DFA, b: DFA) -> list[str] | None:

