@@ -2,8 +2,8 @@
 
 import sys
 
-from bench import (bvh_speed, contexter_speed, laban_effort, learning, matcher_speed, real_gestures, render_speed,
-                   replay_latency, segmenter_speed, stages_accuracy, stylize_speed, terrain_speed)
+from bench import (bvh_speed, contexter_speed, laban_effort, learning, matcher_speed, performers, real_gestures,
+                   render_speed, replay_latency, segmenter_speed, stages_accuracy, stylize_speed, terrain_speed)
 
 
 def main() -> int:
@@ -11,6 +11,8 @@ def main() -> int:
     segmenter_speed.main()
     print()
     real_gestures.main()
+    print()
+    performers.main()
     print()
     matcher_speed.main()
     print()
