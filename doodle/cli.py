@@ -285,7 +285,7 @@ def cmd_stylize(args) -> int:
 
 def cmd_library(args) -> int:
     from doodle.pipeline import load_actions
-    from grammar.library import overlaps
+    from grammar.library import overlaps, swallowed
 
     if args.library_command == "import":
         return _library_import(args)
@@ -305,6 +305,11 @@ def cmd_library(args) -> int:
           f"{len(found)} overlapping pair{'s' * (len(found) != 1)}")
     for o in found:
         print(f"  {o.first} ~ {o.second}: both accept {' '.join(o.witness)}")
+    taken = swallowed(compiled, least=0.05)
+    if taken:
+        print("typical performances read as another action (the narrower language wins an overlap):")
+    for s in taken:
+        print(f"  {s.winner} is read for {s.share:.0%} of {s.action}'s typical strings, e.g. {' '.join(s.witness)}")
     return 0
 
 

@@ -4,11 +4,14 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numpy as np
+
 from doodle.errors import DoodleError
-from grammar.automata import DFA, check_language, compile_expression, intersection_witness
+from doodle.tokens import CODES
+from grammar.automata import DFA, check_language, compile_expression, intersection_witness, sample, shortest
 from grammar.constraints import parse_constraints
 from grammar.expr import parse
-from grammar.matcher import Automaton
+from grammar.matcher import MAX_COUNTED, Automaton, string_counts
 from grammar.shapes import ShapeSet, load_paths, shape_set
 from library.manifest import ActionDef, Library
 
@@ -122,3 +125,41 @@ def overlaps(compiled: Compiled, only: str | None = None) -> list[Overlap]:
             if witness is not None:
                 found.append(Overlap(names[i], names[j], tuple(witness)))
     return found
+
+
+@dataclass(frozen=True)
+class Swallow:
+    """``winner`` is read instead of ``action`` on a ``share`` of the latter's typical strings."""
+
+    winner: str
+    action: str
+    share: float
+    witness: tuple[str, ...]  # the shortest such string
+
+
+def swallowed(compiled: Compiled, strings: int = 200, least: float = 0.05, seed: int = 0) -> list[Swallow]:
+    """Pairs where one action's language takes another's typical performances.
+
+    An action's typical strings are its shortest string and ``strings`` random walks of its
+    automaton stopping at each accepting state with probability ½ (short strings are the
+    likely performances). On each, the Matcher's choice between the actions accepting it
+    exactly is taken (the narrowest language, then the first listed); a pair is reported
+    when another action is chosen on at least ``least`` of them, with the shortest string.
+    """
+    names, dfas = compiled.library.names, compiled.dfas
+    sizes = [string_counts(d, MAX_COUNTED).sum() for d in dfas]
+    rng = np.random.default_rng(seed)
+    found = []
+    for i, name in enumerate(names):
+        pool = [tuple(shortest(dfas[i]))] + [tuple(sample(dfas[i], rng, stop=0.5, max_len=24)) for _ in range(strings)]
+        taken: dict[int, list[tuple[str, ...]]] = {}
+        for words in pool:
+            codes = [CODES[w] for w in words]
+            takers = [j for j in range(len(names)) if dfas[j].accepts(codes)]
+            winner = min(takers, key=lambda j: (sizes[j], j))
+            if winner != i:
+                taken.setdefault(winner, []).append(words)
+        for j, lost in taken.items():
+            if len(lost) >= least * len(pool):
+                found.append(Swallow(names[j], name, len(lost) / len(pool), min(lost, key=len)))
+    return sorted(found, key=lambda s: -s.share)

@@ -77,7 +77,7 @@ def _insertion_closure(dfa: DFA, cap: float) -> np.ndarray:
     return reach
 
 
-def _string_counts(dfa: DFA, longest: int) -> np.ndarray:
+def string_counts(dfa: DFA, longest: int) -> np.ndarray:
     """Number of accepted strings of each length 0..longest (as floats: they grow fast)."""
     ways = np.zeros(dfa.size)
     ways[0] = 1.0
@@ -161,7 +161,13 @@ class Automaton:
                 read[:, p, t] = np.minimum(read[:, p, t], costs[:, a])
             diag = np.arange(q)
             read[:, diag, diag] = np.minimum(read[:, diag, diag], delete[:, None])
-            both = np.min(read[:, :, :, None] + reach[None, None, :, :], axis=2)  # (x, p, r)
+            # min-plus product over the finite entries of `read` only (edges and the diagonal),
+            # grouped by source state: memory (K, q) per token instead of (x, q, q, q)
+            src, dst = np.unique(np.concatenate([np.column_stack([p_idx, d.table[p_idx, a_idx]]),
+                                                 np.column_stack([diag, diag])]), axis=0).T
+            groups = np.flatnonzero(np.concatenate([[True], src[1:] != src[:-1]]))
+            both = np.stack([np.minimum.reduceat(read[x, src, dst][:, None] + reach[dst], groups, axis=0)
+                             for x in range(N_CODES)])  # (x, p, r); every p has its diagonal entry
             blocks.append((off, both, limit))
             initial.append(np.minimum(reach[0], self.cap))
         self.initial = np.concatenate(initial)
@@ -179,7 +185,7 @@ class Automaton:
             self.step_src.append(src[order])
             self.step_off.append(np.searchsorted(dst[order], states))
             self.step_cost.append(cost[order])
-        self.sizes_counted = np.array([_string_counts(d, MAX_COUNTED).sum() for d in dfas])  # specificity
+        self.sizes_counted = np.array([string_counts(d, MAX_COUNTED).sum() for d in dfas])  # specificity
 
     def most_specific(self, candidates: np.ndarray) -> int:
         """Among candidate actions, the one with the narrowest language: the fewest accepted

@@ -245,3 +245,18 @@ def test_library_check_prints_overlaps(capsys):
     assert main(["library", "check"]) == 0
     out = capsys.readouterr().out
     assert "28 actions" in out and "Jump ~ Stomp: both accept T_Y T_N_Y" in out
+
+
+def test_library_check_flags_an_action_whose_typical_strings_another_takes(tmp_path, capsys):
+    """`Hop`'s typical performances include `T_Y T_N_Y`, which the narrower `Bob` takes; the
+    check says so with the string. On the built-in table only Stomp takes a share of Jump's."""
+    (tmp_path / "library.toml").write_text(
+        '[library]\nname = "t"\n\n[[actions]]\nname = "Hop"\nexpression = "(T_Y)+ (T_Z)* (T_N_Y)+"\n'
+        'cyclic = false\nin_place = true\njumping = false\n\n[[actions]]\nname = "Bob"\n'
+        'expression = "(T_Y)+ (T_N_Y)+"\ncyclic = false\nin_place = true\njumping = false\n')
+    assert main(["library", "check", "--library", str(tmp_path), "--no-builtin"]) == 0
+    out = capsys.readouterr().out
+    assert "Bob is read for" in out and "of Hop's typical strings, e.g. T_Y T_N_Y" in out
+    assert main(["library", "check"]) == 0
+    lines = [x for x in capsys.readouterr().out.splitlines() if "typical strings" in x]
+    assert lines == [x for x in lines if "Stomp is read for" in x and "of Jump's" in x] and lines
