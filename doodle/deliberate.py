@@ -12,8 +12,8 @@ both relative to the performance itself:
   absorbed. A hand slowing into a reversal or a corner stays under ε for a time that
   grows with the movement's own duration (for a minimum-jerk stroke of duration T and peak
   speed V, about ``T·√(ε/V)/4`` on each side), so a slow, small performer's corners look
-  like short pauses: a still under 0.65 × the shorter of the two movements around it —
-  and under 2 × ``pause_s`` — is a hold too. A walk of a second brought to a stop before a
+  like short pauses: a still under 0.65 × the shorter of the two tokens around it — the
+  motion whose slowing ends make it — and under 2 × ``pause_s`` is a hold too. A walk of a second brought to a stop before a
   stomp keeps its pause (the still is long against the stomp's lift). The pauses people
   leave between actions are longer (0.15 s and up, plus the slow ends of the movements
   around them).
@@ -22,7 +22,10 @@ both relative to the performance itself:
   translation token is absorbed when its extent is under ``significance`` (⅕) of the largest
   extent among the tokens of its kind (translation or rotation: θ is an exchange rate of
   speeds, and a half turn is not "bigger" than a 20 cm glide) within ``window`` (2) places
-  on either side — holds skipped, real pauses ending the search; any moving token is
+  on either side — holds skipped, real pauses ending the search. A translation alone
+  between two pauses (the landing after a bobbed walk, the hand settling the prop) is a
+  leftover when it is under half that share (1/10) of the movements before the pause
+  before it. Any moving token is
   absorbed under ``ε·min_extent_s`` (1 cm by default), below which no
   movement is deliberate. Rotation tokens face the floor only: a controller gesture's
   turns of the wrist are short and carry what tells two gestures apart (on the real Vive
@@ -43,8 +46,10 @@ import math
 from doodle.tokens import Token
 
 STILL = "T_STILL"
-HOLD_SHARE = 0.65  # a still under 0.65 × the shorter of the movements around it is a hold ...
+HOLD_SHARE = 0.65  # a still under 0.65 × the shorter of the tokens around it is a hold ...
+ACROSS = 0.5  # a lone token is a leftover under half the share against the movements before the pause
 HOLD_CAP = 2.0  # ... up to twice pause_s; a still as long as that is always a pause
+KEEP = 64  # raw tokens kept behind the first undecided one (neighbours, the movement before a still)
 
 
 def extent(a: tuple, b: tuple, theta: float) -> float:
@@ -87,8 +92,7 @@ class Absorber:
         if tok.end - tok.start < self.pause:
             return True
         before, after = self._raw[i - 1][0], self._raw[i + 1][0]
-        pace = HOLD_SHARE * min(before.end - before.start, after.end - after.start)
-        return tok.end - tok.start < pace
+        return tok.end - tok.start < HOLD_SHARE * min(before.end - before.start, after.end - after.start)
 
     def _is_pause(self, i: int) -> bool | None:
         """Whether raw token i is a still that separates movements (None: not known yet)."""
@@ -97,11 +101,13 @@ class Absorber:
         hold = self._is_hold(i)
         return None if hold is None else not hold
 
-    def _reference(self, i: int, step: int) -> float | None:
+    def _reference(self, i: int, step: int, across: bool = False) -> float | None:
         """Largest extent among the movements of raw token i's kind (translations or
-        rotations) within the window on one side of it; None when that side is not known yet."""
+        rotations) within the window on one side of it, up to the nearest pause — or, with
+        ``across``, among the window's movements beyond that pause; None when that side is
+        not known yet."""
         kind = self._raw[i][0].name[0]
-        best, seen, j = 0.0, 0, i + step
+        best, seen, j, crossed = 0.0, 0, i + step, False
         while seen < self.window:
             if j < 0:
                 return best
@@ -112,11 +118,12 @@ class Absorber:
                 pause = self._is_pause(j)
                 if pause is None:
                     return None
-                if pause:
+                if pause and (crossed or not across):
                     return best
-                j += step  # a hold: look past it
+                crossed = crossed or pause
+                j += step  # a hold (or, across, the pause): look past it
                 continue
-            if tok.name[0] == kind:
+            if tok.name[0] == kind and crossed == across:
                 best = max(best, ext)
             seen, j = seen + 1, j + step
         return best
@@ -132,7 +139,11 @@ class Absorber:
         before, after = self._reference(i, -1), self._reference(i, +1)
         if before is None or after is None:
             return None
-        return ext < self.significance * max(before, after)
+        if ext < self.significance * max(before, after):
+            return True
+        # a leftover after an action, alone before the next pause: against what came before it
+        lone = before == 0.0 and after == 0.0 and self._raw[i - 1][0].name == STILL if i > 0 else False
+        return lone and ext < ACROSS * self.significance * self._reference(i, -1, across=True)
 
     # --- streaming ----------------------------------------------------------------------
     def push(self, token: Token, ext: float) -> list[Token]:
@@ -153,7 +164,7 @@ class Absorber:
             self._decided.append((self._raw[self._next][0], verdict))
             self._next += 1
             out += self._flush(final=False)
-        drop = self._next - (2 * self.window + 2)  # keep what later decisions look back at
+        drop = self._next - KEEP  # keep what later decisions look back at
         if drop > 0:
             del self._raw[:drop]
             self._next -= drop

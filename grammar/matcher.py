@@ -30,6 +30,11 @@ programming over token positions:
   listed first;
 * a pause is never noise: an input ``T_STILL`` can only be matched by ``T_STILL``.
 
+An exact one-shot segment that begins with a walk (tokens some cyclic action reads exactly,
+the one-shot still exact without them) is split into the walk and the one-shot
+(:meth:`Matcher._peel`): a walk that flows into a stomp is Walk, Stomp — not a Jump with a
+run-up.
+
 Fewer segments at equal exactness means longer matches, so a cyclic action such as Walk
 keeps absorbing tokens while it matches — and across a stray token (``T_Z T_X_Z T_Y T_Z``
 is one Walk at distance 1, Algorithm 1's cyclic rule) — and an exact segmentation beats an
@@ -133,6 +138,7 @@ class Automaton:
         self.limits = np.array(limits if limits is not None else [threshold] * len(names), dtype=float)
         self.names, self.threshold = list(names), float(self.limits.max())
         self.cyclic = list(cyclic) if cyclic is not None else [False] * len(names)
+        self.dfas = list(dfas)
         sizes = [d.size for d in dfas]
         offsets = np.concatenate([[0], np.cumsum(sizes)])
         self.n = int(offsets[-1])
@@ -267,6 +273,27 @@ class Matcher:
             positions.add(self._back[p][0])
         return positions.pop()
 
+    def _peel(self, s: int, p: int, action: int) -> list[tuple[int, int, int]]:
+        """An exact one-shot segment whose first tokens are a walk on their own, with the
+        action still exact without them, is that walk and then the action: locomotion
+        leading into a one-shot is animated as locomotion (Algorithm 1 lets a cyclic action
+        keep what it matches). Jump's optional run-up ``(T_Z)*`` would otherwise swallow a
+        walk that flows into a stomp (``T_Z T_Y T_N_Y``: Walk, then Stomp). The rest is
+        re-decided between the actions accepting it (the narrowest language). Trailing
+        tokens are left alone: a one-shot's follow-through often returns the prop (Pick
+        up's closing ``T_N_Z``, Crescent Kick's ``T_X``)."""
+        auto = self.auto
+        if auto.cyclic[action]:
+            return [(s, p, action)]
+        codes = [CODES[self._tokens[k].name] for k in range(s, p)]
+        walks = [a for a in range(len(auto.names)) if auto.cyclic[a]]
+        for k in range(len(codes) - 1, 0, -1):  # the longest leading walk
+            found = np.array([a for a in walks if auto.dfas[a].accepts(codes[:k])], dtype=np.int64)
+            if len(found) and auto.dfas[action].accepts(codes[k:]):
+                rest = np.array([a for a in range(len(auto.names)) if auto.dfas[a].accepts(codes[k:])], dtype=np.int64)
+                return [(s, s + k, auto.most_specific(found)), (s + k, p, auto.most_specific(rest))]
+        return [(s, p, action)]
+
     def _emit_until(self, stop: int) -> list[Segment]:
         path, p = [], stop
         while p > self._done:
@@ -284,7 +311,11 @@ class Matcher:
             if self._unknown is not None:
                 out.append(self._unknown)
                 self._unknown = None
-            out.append(Segment(self.auto.names[action], s, p, t0.start, t1.end, distance == 0.0, distance))
+            if distance == 0.0:
+                out += [Segment(self.auto.names[a], i, j, self._tokens[i].start, self._tokens[j - 1].end, True, 0.0)
+                        for i, j, a in self._peel(s, p, action)]
+                continue
+            out.append(Segment(self.auto.names[action], s, p, t0.start, t1.end, False, distance))
         for q in range(self._done, stop):  # forget what is final
             self._tokens.pop(q, None)
             self._best.pop(q, None)

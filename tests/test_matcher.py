@@ -69,6 +69,20 @@ def expected(words):
     return NAMES[AUTO.most_specific(candidates)]
 
 
+def expected_segments(words):
+    """(action, first, stop) the policy gives a string of some action: the most specific
+    acceptor — split after the longest leading walk when that one-shot still accepts the rest."""
+    whole = expected(words)
+    cyclic = {a.name for a in COMPILED.library.actions if a.cyclic}
+    if whole not in cyclic:
+        for k in range(len(words) - 1, 0, -1):
+            walks = [a for a in accepting(words[:k]) if a in cyclic]
+            if walks and whole in accepting(words[k:]):
+                walk = NAMES[AUTO.most_specific(np.array([NAMES.index(a) for a in walks]))]
+                return [(walk, 0, k), (expected(words[k:]), k, len(words))]
+    return [(whole, 0, len(words))]
+
+
 @pytest.mark.parametrize("name", NAMES)
 def test_sampled_strings_and_their_doodles_are_recognised(name):
     """Strings sampled from each action's language are recognised exactly, as one segment:
@@ -78,10 +92,11 @@ def test_sampled_strings_and_their_doodles_are_recognised(name):
     wins = 0
     for words in strings:
         segs = match(tokens_of(words), AUTO)
-        assert [(s.action, s.exact, s.first, s.stop) for s in segs] == [(expected(words), True, 0, len(words))], words
-        wins += segs[0].action == name
+        assert [(s.action, s.first, s.stop) for s in segs] == expected_segments(words), words
+        assert all(s.exact for s in segs)
+        wins += segs[-1].action == name
     assert wins, f"{name} never wins on its own strings: {[expected(w) for w in strings]}"
-    mine = [w for w in strings if expected(w) == name]
+    mine = [w for w in strings if expected_segments(w) == [(name, 0, len(w))]]
     for k, words in enumerate(mine[:2]):
         doodle = Doodle((perform(words, seed=k),), 90.0)
         toks, segs = recognize(doodle, COMPILED)["c0"]
@@ -154,11 +169,8 @@ def test_overlaps_on_the_default_table_are_resolved_by_specificity():
     assert ("Jump", "Stomp", ("T_Y", "T_N_Y")) in [(o.first, o.second, o.witness) for o in found]
     for o in found:
         segs = match(tokens_of(list(o.witness)), AUTO)
-        assert len(segs) == 1 and segs[0].exact
-        chosen = segs[0].action
-        assert chosen in accepting(list(o.witness))
-        candidates = np.array([NAMES.index(a) for a in accepting(list(o.witness))])
-        assert NAMES.index(chosen) == AUTO.most_specific(candidates)
+        assert [(s.action, s.first, s.stop) for s in segs] == expected_segments(list(o.witness))
+        assert all(s.exact for s in segs)
     assert match(tokens_of(["T_Y", "T_N_Y"]), AUTO)[0].action == "Stomp"
 
 
