@@ -9,14 +9,13 @@ both relative to the performance itself:
 
 * **A hold is not a pause.** A ``T_STILL`` between two movements shorter than
   ``pause_s`` (0.12 s) is the hand changing direction, not the performer pausing; it is
-  absorbed. A hand slowing into a reversal or a corner stays under ε for a time that
-  grows with the movement's own duration (for a minimum-jerk stroke of duration T and peak
-  speed V, about ``T·√(ε/V)/4`` on each side), so a slow, small performer's corners look
-  like short pauses: a still under 0.65 × the shorter of the two tokens around it — the
-  motion whose slowing ends make it — and under 2 × ``pause_s`` is a hold too. A walk of a second brought to a stop before a
-  stomp keeps its pause (the still is long against the stomp's lift). The pauses people
-  leave between actions are longer (0.15 s and up, plus the slow ends of the movements
-  around them).
+  absorbed. A hand slowing into a reversal or a corner spends a while under ε before it
+  stops, and longer the slower and smaller the movement, so a slow performer's corners
+  look like short pauses. So a still up to 2 × ``pause_s`` long is a hold unless it holds
+  at least ``REST_S`` (0.1 s) of rest beyond the slowing ends of the movements around it:
+  each end's time under ε is estimated from how long that movement took to slow from 2ε
+  to ε (× 1.7: between a linear fall, × 1, and a minimum-jerk one, speed ∝ t², × 2.41).
+  The pauses people leave between actions hold more rest than that (0.15 s and up).
 * **A token must cover ground.** A token's *extent* is ``√(d² + (θ·φ)²)`` — the chord d it
   moves and the angle φ it turns, in the Segmenter's metres-per-radian exchange rate θ. A
   translation token is absorbed when its extent is under ``significance`` (⅕) of the largest
@@ -46,7 +45,11 @@ import math
 from doodle.tokens import Token
 
 STILL = "T_STILL"
-HOLD_SHARE = 0.65  # a still under 0.65 × the shorter of the tokens around it is a hold ...
+REST_S = 0.1  # s: a still with less rest than this beyond the movements' slowing ends is a hold ...
+# time a movement spends under ε as it comes to rest, per unit of time it takes from 2ε to ε:
+# 1 if its speed falls linearly, 1/(√2 − 1) = 2.41 if as t² (minimum jerk); the midpoint, as
+# the smoothing kernel rounds the speed near rest
+SLOWING = (1.0 + 1.0 / (math.sqrt(2.0) - 1.0)) / 2.0
 ACROSS = 0.5  # a lone token is a leftover under half the share against the movements before the pause
 HOLD_CAP = 2.0  # ... up to twice pause_s; a still as long as that is always a pause
 KEEP = 64  # raw tokens kept behind the first undecided one (neighbours, the movement before a still)
@@ -72,8 +75,9 @@ class Absorber:
     def __init__(self, rate: float, pause_s: float, significance: float, floor: float, window: int):
         self.pause = pause_s * rate  # samples
         self.longest_hold = HOLD_CAP * pause_s * rate
+        self.rest = REST_S * rate  # samples of rest beyond the slowing ends that make a pause
         self.significance, self.floor, self.window = significance, floor, window
-        self._raw: list[tuple[Token, float]] = []  # raw tokens not yet decided
+        self._raw: list[tuple[Token, float, tuple[int, int]]] = []  # raw tokens (token, extent, ramps)
         self._next = 0  # index into _raw of the first undecided token
         self._decided: list[tuple[Token, bool]] = []  # decided, not yet emitted: (token, absorbed)
         self._closed = False
@@ -91,8 +95,8 @@ class Absorber:
             return tok.end - tok.start < self.pause
         if tok.end - tok.start < self.pause:
             return True
-        before, after = self._raw[i - 1][0], self._raw[i + 1][0]
-        return tok.end - tok.start < HOLD_SHARE * min(before.end - before.start, after.end - after.start)
+        slowing = SLOWING * (self._raw[i - 1][2][1] + self._raw[i + 1][2][0])
+        return tok.end - tok.start - slowing < self.rest
 
     def _is_pause(self, i: int) -> bool | None:
         """Whether raw token i is a still that separates movements (None: not known yet)."""
@@ -113,7 +117,7 @@ class Absorber:
                 return best
             if j >= len(self._raw):
                 return best if self._closed else None
-            tok, ext = self._raw[j]
+            tok, ext, _ = self._raw[j]
             if tok.name == STILL:
                 pause = self._is_pause(j)
                 if pause is None:
@@ -129,7 +133,7 @@ class Absorber:
         return best
 
     def _absorbed(self, i: int) -> bool | None:
-        tok, ext = self._raw[i]
+        tok, ext, _ = self._raw[i]
         if tok.name == STILL:
             return self._is_hold(i)
         if ext < self.floor:
@@ -146,8 +150,10 @@ class Absorber:
         return lone and ext < ACROSS * self.significance * self._reference(i, -1, across=True)
 
     # --- streaming ----------------------------------------------------------------------
-    def push(self, token: Token, ext: float) -> list[Token]:
-        self._raw.append((token, ext))
+    def push(self, token: Token, ext: float, ramps: tuple[int, int] = (0, 0)) -> list[Token]:
+        """Add a raw token with its extent (m) and ramps: the samples from its start to its
+        first sample faster than 2ε, and from its last such sample to its end."""
+        self._raw.append((token, ext, ramps))
         return self._advance()
 
     def close(self) -> list[Token]:
@@ -193,9 +199,9 @@ class Absorber:
             return out
 
 
-def absorb(tokens: list[Token], extents: list[float], absorber: Absorber) -> list[Token]:
+def absorb(tokens: list[Token], extents: list[float], ramps: list[tuple[int, int]], absorber: Absorber) -> list[Token]:
     """Batch form: the stage run over a whole token list."""
     out: list[Token] = []
-    for tok, ext in zip(tokens, extents):
-        out += absorber.push(tok, ext)
+    for tok, ext, ramp in zip(tokens, extents, ramps):
+        out += absorber.push(tok, ext, ramp)
     return out + absorber.close()

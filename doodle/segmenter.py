@@ -148,30 +148,37 @@ def smoothed_track(track: Track, rate: float, params: SegmenterParams, source: s
     return rows
 
 
-def codes_of_rows(rows: np.ndarray, rate: float, params: SegmenterParams) -> np.ndarray:
+def codes_of_rows(rows: np.ndarray, rate: float, params: SegmenterParams) -> tuple[np.ndarray, np.ndarray]:
     """Bin code of every smoothed sample (sample 0 takes sample 1's bin), directions read in
-    the frame levelled at the latest rest (:mod:`doodle.levelling`)."""
+    the frame levelled at the latest rest (:mod:`doodle.levelling`), and the squared speed
+    ``‖(v, θω)‖²`` of each."""
     v, w = local_velocities(rows[:, 0], rows[:, 1:4], rows[:, 4:], rate)
     v, w = np.vstack([v[:1], v]), np.vstack([w[:1], w])
+    v2, tw2 = _norms(v, w, params.theta * params.theta)
     c = None
     if params.cos_cap is not None and len(rows):
-        v2, tw2 = _norms(v, w, params.theta * params.theta)
         c = levels(rows[:, 4:], v2 + tw2 <= params.eps * params.eps, params.alpha(rate), params.cos_cap)
-    return sample_codes(v, w, params, c)
+    return sample_codes(v, w, params, c), v2 + tw2
 
 
 def sample_codes_of(track: Track, rate: float, params: SegmenterParams, source: str = "<memory>") -> np.ndarray:
     """Bin code of every sample of a track (sample 0 takes sample 1's bin)."""
-    return codes_of_rows(smoothed_track(track, rate, params, source), rate, params)
+    return codes_of_rows(smoothed_track(track, rate, params, source), rate, params)[0]
 
 
 def tokenize(track: Track, rate: float, params: SegmenterParams = SegmenterParams(), source: str = "<memory>") -> list[Token]:
     """Batch Segmenter: the tokens of one track sampled at nominal ``rate`` Hz."""
     rows = smoothed_track(track, rate, params, source)
-    raw = debounce(codes_of_rows(rows, rate, params), params.alpha(rate))
+    codes, speed2 = codes_of_rows(rows, rate, params)
+    raw = debounce(codes, params.alpha(rate))
     last = len(rows) - 1
     extents = [extent(rows[k.start].tolist(), rows[min(k.end, last)].tolist(), params.theta) for k in raw]
-    return absorb(raw, extents, params.absorber(rate))
+    fast = speed2 >= 4.0 * params.eps * params.eps
+    ramps = []
+    for k in raw:  # samples from the token's start to its first, and from its last, sample over 2ε
+        on = np.flatnonzero(fast[k.start:k.end])
+        ramps.append((int(on[0]), int(k.end - k.start - 1 - on[-1])) if len(on) else (k.end - k.start,) * 2)
+    return absorb(raw, extents, ramps, params.absorber(rate))
 
 
 def tokenize_doodle(doodle: Doodle, params: SegmenterParams = SegmenterParams()) -> dict[str, list[Token]]:
@@ -209,6 +216,8 @@ class Segmenter:
         self._still_run = 0
         self._row0 = self._cur_row = self._run_row = self._last_row = None  # rows at token boundaries
         self._absorber = params.absorber(rate)
+        self._fast2 = 4.0 * params.eps * params.eps
+        self._tok_fast = self._run_fast = None  # (first, last) sample over 2ε: token before the run, the run
 
     @property
     def pending(self) -> Token | None:
@@ -263,8 +272,9 @@ class Segmenter:
         smoothed (tracking lost for good): the tokens held back and the one in progress."""
         out: list[Token] = []
         if self._cur is not None:
-            out += self._absorber.push(Token(NAMES[self._cur], self._cur_start, self._n),
-                                       extent(self._cur_row, self._last_row, self.params.theta))
+            self._join_run()
+            tok = Token(NAMES[self._cur], self._cur_start, self._n)
+            out += self._absorber.push(tok, extent(self._cur_row, self._last_row, self.params.theta), self._ramps(tok))
             self._cur = None
         return out + self._absorber.close()
 
@@ -292,17 +302,18 @@ class Segmenter:
 
     def _sample(self, vel: tuple, row: tuple, out: list[Token]) -> None:
         code = sample_code(vel, self._theta2, self._eps2, self._level)
-        self._step(code, row, out)
+        vx, vy, vz, wx, wy, wz = vel
+        speed2 = vx * vx + vy * vy + vz * vz + self._theta2 * (wx * wx + wy * wy + wz * wz)
+        self._step(code, row, speed2, out)
         if self._cos_cap is None:
             return
-        vx, vy, vz, wx, wy, wz = vel
-        still = vx * vx + vy * vy + vz * vz + self._theta2 * (wx * wx + wy * wy + wz * wz) <= self._eps2
+        still = speed2 <= self._eps2
         self._still_run = self._still_run + 1 if still else 0
         if self._still_run >= self.alpha:  # at rest: the world's up says where the prop's is
             c, ok = level(row[4], row[5], row[6], row[7], self._cos_cap)
             self._level = c if ok else IDENTITY
 
-    def _step(self, code: int, row: tuple, out: list[Token]) -> None:
+    def _step(self, code: int, row: tuple, speed2: float, out: list[Token]) -> None:
         i = self._n
         self._n += 1
         self._last_row = row
@@ -311,12 +322,28 @@ class Segmenter:
         if code == self._run_code:
             self._run_len += 1
         else:
+            self._join_run()  # the run so far belongs to the token in progress
             self._run_code, self._run_start, self._run_len = code, i, 1
             self._run_row = row
+        if speed2 >= self._fast2:  # first and last sample over 2ε, in the run
+            self._run_fast = (i if self._run_fast is None else self._run_fast[0], i)
         if self._run_len == self.alpha:
             if self._cur is None:
                 self._cur, self._cur_start, self._cur_row = code, 0, self._row0
             elif code != self._cur:
                 raw = Token(NAMES[self._cur], self._cur_start, self._run_start)
-                out += self._absorber.push(raw, extent(self._cur_row, self._run_row, self.params.theta))
+                out += self._absorber.push(raw, extent(self._cur_row, self._run_row, self.params.theta),
+                                           self._ramps(raw))
                 self._cur, self._cur_start, self._cur_row = code, self._run_start, self._run_row
+                self._tok_fast = None  # the token now starts at the run
+
+    def _join_run(self) -> None:
+        if self._run_fast is not None:
+            self._tok_fast = self._run_fast if self._tok_fast is None else (self._tok_fast[0], self._run_fast[1])
+        self._run_fast = None
+
+    def _ramps(self, tok: Token) -> tuple[int, int]:
+        """Samples from a token's start to its first sample over 2ε, and from its last one to its end."""
+        if self._tok_fast is None:
+            return tok.end - tok.start, tok.end - tok.start
+        return self._tok_fast[0] - tok.start, tok.end - 1 - self._tok_fast[1]

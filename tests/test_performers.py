@@ -112,7 +112,7 @@ def absorber(**kw):
 def test_a_short_still_between_movements_is_a_hold():
     raw = [Token("T_STILL", 0, 40), Token("T_Y", 40, 70), Token("T_STILL", 70, 76), Token("T_N_Y", 76, 100),
            Token("T_STILL", 100, 160)]
-    out = absorb(raw, [0.0, 0.05, 0.0, 0.05, 0.0], absorber())
+    out = absorb(raw, [0.0, 0.05, 0.0, 0.05, 0.0], [(0, 0)] * 5, absorber())
     assert [(k.name, k.start, k.end) for k in out] == [("T_STILL", 0, 40), ("T_Y", 40, 73), ("T_N_Y", 73, 100),
                                                        ("T_STILL", 100, 160)]
 
@@ -120,22 +120,36 @@ def test_a_short_still_between_movements_is_a_hold():
 def test_a_pause_is_kept_and_a_blip_joins_the_glide_around_it():
     raw = [Token("T_STILL", 0, 40), Token("T_Z", 40, 80), Token("T_Y_Z", 80, 86), Token("T_Z", 86, 120),
            Token("T_STILL", 120, 160), Token("T_Y", 160, 200), Token("T_STILL", 200, 240)]
-    out = absorb(raw, [0.0, 0.08, 0.006, 0.07, 0.0, 0.05, 0.0], absorber())
+    out = absorb(raw, [0.0, 0.08, 0.006, 0.07, 0.0, 0.05, 0.0], [(0, 0)] * 7, absorber())
     assert [(k.name, k.start, k.end) for k in out] == [("T_STILL", 0, 40), ("T_Z", 40, 120), ("T_STILL", 120, 160),
                                                        ("T_Y", 160, 200), ("T_STILL", 200, 240)]
 
 
 def test_motion_below_any_deliberate_movement_is_still():
     raw = [Token("T_STILL", 0, 40), Token("R_X", 40, 46), Token("T_STILL", 46, 100)]
-    assert [(k.name, k.start, k.end) for k in absorb(raw, [0.0, 0.004, 0.0], absorber())] == [("T_STILL", 0, 100)]
+    assert [(k.name, k.start, k.end) for k in absorb(raw, [0.0, 0.004, 0.0], [(0, 0)] * 3, absorber())] == \
+        [("T_STILL", 0, 100)]
     raw = [Token("R_X", 0, 6)]
-    assert [k.name for k in absorb(raw, [0.002], absorber())] == ["T_STILL"]
+    assert [k.name for k in absorb(raw, [0.002], [(0, 0)], absorber())] == ["T_STILL"]
 
 
 def test_the_stage_off_keeps_raw_tokens():
     raw = [Token("T_Z", 0, 40), Token("T_STILL", 40, 45), Token("T_Y", 45, 50)]
     off = Absorber(90.0, 0.0, 0.0, 0.0, 2)
-    assert absorb(raw, [0.1, 0.0, 0.001], off) == raw
+    assert absorb(raw, [0.1, 0.0, 0.001], [(0, 0)] * 3, off) == raw
+
+
+def test_a_still_with_rest_beyond_the_slowing_ends_is_a_pause():
+    """0.2 s of still (18 samples at 90 Hz): a hold when the movements around it took
+    40 ms each to slow from 2ε to ε (about 0.14 s under ε between them), a pause when they
+    stopped briskly (10 ms each: 0.17 s of rest)."""
+    raw = [Token("T_STILL", 0, 40), Token("T_Y", 40, 70), Token("T_STILL", 70, 88), Token("T_N_Y", 88, 120),
+           Token("T_STILL", 120, 160)]
+    slow = [(0, 0), (0, 4), (0, 0), (4, 0), (0, 0)]
+    brisk = [(0, 0), (0, 1), (0, 0), (1, 0), (0, 0)]
+    assert [k.name for k in absorb(raw, [0.0, 0.05, 0.0, 0.05, 0.0], slow, absorber())] == ["T_STILL", "T_Y", "T_N_Y",
+                                                                                           "T_STILL"]
+    assert [k.name for k in absorb(raw, [0.0, 0.05, 0.0, 0.05, 0.0], brisk, absorber())] == [k.name for k in raw]
 
 
 def test_levelling_stands_a_tilted_prop_upright():
