@@ -15,7 +15,7 @@ same scenes read by the Segmenter without its deliberate-motion stage (no levell
 holds or blips absorbed; the Matcher as it is now). Then the main example played the way
 the recogniser was built around, one minimum-jerk stroke per token (:mod:`doodle.synth`),
 over size, tempo, noise and rate. Two worker processes, BLAS on one thread. Draws ``out/bench/performers.png``
-(style × action, coloured by the exact rate). ``python -m bench.performers [--quick]``.
+(style × action, alone and in a sequence, coloured by the exact rate). ``python -m bench.performers [--quick]``.
 """
 
 from __future__ import annotations
@@ -122,6 +122,7 @@ def main(quick: bool = False) -> dict:
     for style, r in zip(styles, rows):
         print(f"    {style.label():<{width}}  {rate(r['main']):.2f}   (without: {rate(r['main_raw']):.2f})")
     grid = np.array([[rate(r["alone"][a]) for a in ACTIONS] for r in rows])
+    grid_inside = np.array([[rate(r["inside"][a]) for a in ACTIONS] for r in rows])
     joined = {key: {a: [v for r in rows for v in r[key][a]] for a in ACTIONS} for key in ("alone", "alone_raw", "inside")}
     print(f"  every built-in action alone ({len(styles)} styles × {takes_action} takes): exact "
           f"{rate([v for vs in joined['alone'].values() for v in vs]):.3f} (target ≥ 0.90 each); without the stage: "
@@ -140,27 +141,28 @@ def main(quick: bool = False) -> dict:
     print("  most common misreadings:")
     for (what, got), n in (misread + stroke_misread).most_common(10):
         print(f"    ×{n}  {what} → {got or '(nothing)'}")
-    _draw(grid, styles)
+    _draw(grid, grid_inside, styles)
     print(f"  picture: {OUT}")
     return {"main": rate(all_main), "alone": {a: rate(v) for a, v in joined["alone"].items()},
             "worst": style_rates[worst], "strokes": ours}
 
 
-def _draw(grid: np.ndarray, styles) -> None:
+def _draw(alone: np.ndarray, inside: np.ndarray, styles) -> None:
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    fig, ax = plt.subplots(figsize=(14, 0.28 * len(styles) + 2.5))
-    image = ax.imshow(grid, cmap="RdYlGn", vmin=0, vmax=1, aspect="auto")
-    ax.set_xticks(range(len(ACTIONS)), ACTIONS, rotation=60, ha="right", fontsize=8)
-    ax.set_yticks(range(len(styles)), [s.label() for s in styles], fontsize=7)
-    ax.set_title("Built-in actions performed alone: exact rate per performer style")
-    fig.colorbar(image, ax=ax, fraction=0.02)
-    fig.tight_layout()
+    fig, axes = plt.subplots(1, 2, figsize=(22, 0.28 * len(styles) + 2.5), sharey=True)
+    for ax, grid, title in ((axes[0], alone, "alone (Idle, action, Idle)"),
+                            (axes[1], inside, "in a sequence (Idle, Walk, action, Side Walk Left, Idle)")):
+        image = ax.imshow(grid, cmap="RdYlGn", vmin=0, vmax=1, aspect="auto")
+        ax.set_xticks(range(len(ACTIONS)), ACTIONS, rotation=60, ha="right", fontsize=8)
+        ax.set_title(f"Built-in actions {title}: exact rate per performer style", fontsize=10)
+    axes[0].set_yticks(range(len(styles)), [s.label() for s in styles], fontsize=7)
+    fig.colorbar(image, ax=axes, fraction=0.015)
     OUT.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(OUT, dpi=110)
+    fig.savefig(OUT, dpi=100, bbox_inches="tight")
     plt.close(fig)
 
 

@@ -91,6 +91,8 @@ class Absorber:
             return False  # a doodle's opening rest is never a hold
         if i + 1 >= len(self._raw):
             return False if self._closed else None
+        if self._raw[i + 1][1] < self.floor and i + 2 >= len(self._raw) and not self._closed:
+            return None  # a flicker follows: a still after it would join this one
         if i == 0:
             return tok.end - tok.start < self.pause
         if tok.end - tok.start < self.pause:
@@ -153,7 +155,14 @@ class Absorber:
     def push(self, token: Token, ext: float, ramps: tuple[int, int] = (0, 0)) -> list[Token]:
         """Add a raw token with its extent (m) and ramps: the samples from its start to its
         first sample faster than 2ε, and from its last such sample to its end."""
-        self._raw.append((token, ext, ramps))
+        raw = self._raw
+        if (token.name == STILL and len(raw) - self._next >= 2 and raw[-2][0].name == STILL
+                and raw[-1][0].name != STILL and raw[-1][1] < self.floor):
+            # a still, a flicker below any deliberate movement, a still: one still (so a
+            # noisy pause is judged by its whole length)
+            raw[-2:] = [(Token(STILL, raw[-2][0].start, token.end), 0.0, (0, 0))]
+        else:
+            raw.append((token, ext, ramps))
         return self._advance()
 
     def close(self) -> list[Token]:
