@@ -17,20 +17,20 @@ both relative to the performance itself:
   to ε (× 1.7: between a linear fall, × 1, and a minimum-jerk one, speed ∝ t², × 2.41).
   The pauses people leave between actions hold more rest than that (0.15 s and up).
 * **A token must cover ground.** A token's *extent* is ``√(d² + (θ·φ)²)`` — the chord d it
-  moves and the angle φ it turns, in the Segmenter's metres-per-radian exchange rate θ. A
-  translation token is absorbed when its extent is under ``significance`` (⅕) of the largest
-  extent among the tokens of its kind (translation or rotation: θ is an exchange rate of
-  speeds, and a half turn is not "bigger" than a 20 cm glide) within ``window`` (2) places
-  on either side — holds skipped, real pauses ending the search. A translation alone
+  moves and the angle φ it turns, in the Segmenter's metres-per-radian exchange rate θ.
+  Any moving token under ``ε·min_extent_s`` (1 cm by default) is absorbed: no deliberate
+  movement is that small. A translation token is also absorbed when its extent is under
+  ``significance`` (⅕) of the largest translation within ``window`` (2) places on either
+  side — holds skipped, pauses ending the search (translations only: θ is an exchange rate
+  of speeds, and a half turn is not "bigger" than a 20 cm glide). A translation alone
   between two pauses (the landing after a bobbed walk, the hand settling the prop) is a
   leftover when it is under half that share (1/10) of the movements before the pause
-  before it. Any moving token is
-  absorbed under ``ε·min_extent_s`` (1 cm by default), below which no
-  movement is deliberate. Rotation tokens face the floor only: a controller gesture's
-  turns of the wrist are short and carry what tells two gestures apart (on the real Vive
-  recordings, the relative rule on rotations cost nearest-string consistency). Both scale
-  with the doodle (``params.scaled``), so the law
-  "scaled doodle, scaled thresholds, same tokens" still holds.
+  before it. Rotation tokens face the floor only: a controller gesture's turns of the
+  wrist are short and carry what tells two gestures apart (on the real Vive recordings the
+  relative rule on rotations cost nearest-string consistency). The floor and the shares
+  scale with the doodle (``params.scaled``), so "scaled doodle, scaled thresholds, same
+  tokens" still holds. A still, a flicker under the floor and a still are one still, so a
+  noisy pause is judged by its whole length.
 
 Absorbed tokens give their samples to their neighbours: to one token if both neighbours
 carry the same name (a walk bobbed up for a moment stays one walk), else split at the
@@ -70,7 +70,9 @@ def extent(a: tuple, b: tuple, theta: float) -> float:
 
 
 class Absorber:
-    """Streaming stage: raw tokens (with extents) in, deliberate tokens out."""
+    """Streaming stage: raw tokens (with extents and ramps) in, deliberate tokens out. A
+    token is decided once what its rules look at is known (its neighbours, the window on
+    either side); it is emitted once the next kept token is decided."""
 
     def __init__(self, rate: float, pause_s: float, significance: float, floor: float, window: int):
         self.pause = pause_s * rate  # samples
@@ -93,8 +95,6 @@ class Absorber:
             return False if self._closed else None
         if self._raw[i + 1][1] < self.floor and i + 2 >= len(self._raw) and not self._closed:
             return None  # a flicker follows: a still after it would join this one
-        if i == 0:
-            return tok.end - tok.start < self.pause
         if tok.end - tok.start < self.pause:
             return True
         slowing = SLOWING * (self._raw[i - 1][2][1] + self._raw[i + 1][2][0])
@@ -148,7 +148,7 @@ class Absorber:
         if ext < self.significance * max(before, after):
             return True
         # a leftover after an action, alone before the next pause: against what came before it
-        lone = before == 0.0 and after == 0.0 and self._raw[i - 1][0].name == STILL if i > 0 else False
+        lone = i > 0 and before == 0.0 and after == 0.0 and self._raw[i - 1][0].name == STILL
         return lone and ext < ACROSS * self.significance * self._reference(i, -1, across=True)
 
     # --- streaming ----------------------------------------------------------------------
