@@ -33,7 +33,7 @@ programming over token positions:
 An exact one-shot segment that begins with a walk (tokens some cyclic action reads exactly,
 the one-shot still exact without them) is split into the walk and the one-shot
 (:meth:`Matcher._peel`): a walk that flows into a stomp is Walk, Stomp — not a Jump with a
-run-up.
+run-up; so is one that ends with a walk lasting longer than the rest of it.
 
 Fewer segments at equal exactness means longer matches, so a cyclic action such as Walk
 keeps absorbing tokens while it matches — and across a stray token (``T_Z T_X_Z T_Y T_Z``
@@ -278,21 +278,40 @@ class Matcher:
         action still exact without them, is that walk and then the action: locomotion
         leading into a one-shot is animated as locomotion (Algorithm 1 lets a cyclic action
         keep what it matches). Jump's optional run-up ``(T_Z)*`` would otherwise swallow a
-        walk that flows into a stomp (``T_Z T_Y T_N_Y``: Walk, then Stomp). The rest is
-        re-decided between the actions accepting it (the narrowest language). Trailing
-        tokens are left alone: a one-shot's follow-through often returns the prop (Pick
-        up's closing ``T_N_Z``, Crescent Kick's ``T_X``)."""
+        walk that flows into a stomp (``T_Z T_Y T_N_Y``: Walk, then Stomp). Its last tokens
+        are split off the same way when they last longer than the rest of it — a walk that
+        follows without a pause, not a follow-through that returns the prop (Pick up's
+        closing ``T_N_Z``, Crescent Kick's ``T_X``). What remains is re-decided between the
+        actions accepting it (the narrowest language)."""
         auto = self.auto
         if auto.cyclic[action]:
             return [(s, p, action)]
         codes = [CODES[self._tokens[k].name] for k in range(s, p)]
         walks = [a for a in range(len(auto.names)) if auto.cyclic[a]]
-        for k in range(len(codes) - 1, 0, -1):  # the longest leading walk
-            found = np.array([a for a in walks if auto.dfas[a].accepts(codes[:k])], dtype=np.int64)
-            if len(found) and auto.dfas[action].accepts(codes[k:]):
-                rest = np.array([a for a in range(len(auto.names)) if auto.dfas[a].accepts(codes[k:])], dtype=np.int64)
-                return [(s, s + k, auto.most_specific(found)), (s + k, p, auto.most_specific(rest))]
-        return [(s, p, action)]
+
+        def walk(part):
+            found = np.array([a for a in walks if auto.dfas[a].accepts(part)], dtype=np.int64)
+            return auto.most_specific(found) if len(found) else None
+
+        def samples(i, j):
+            return self._tokens[j - 1].end - self._tokens[i].start
+
+        lo, hi, head, tail = 0, len(codes), [], []
+        for k in range(hi - 1, 0, -1):  # the longest leading walk
+            w = walk(codes[:k])
+            if w is not None and auto.dfas[action].accepts(codes[k:]):
+                head, lo = [(s, s + k, w)], k
+                break
+        for k in range(lo + 1, hi):  # the longest trailing walk that outlasts the rest
+            w = walk(codes[k:])
+            if w is not None and auto.dfas[action].accepts(codes[lo:k]) and samples(s + k, p) > samples(s + lo, s + k):
+                tail, hi = [(s + k, p, w)], k
+                break
+        if head or tail:
+            rest = codes[lo:hi]
+            action = auto.most_specific(np.array([a for a in range(len(auto.names))
+                                                  if auto.dfas[a].accepts(rest)], dtype=np.int64))
+        return head + [(s + lo, s + hi, action)] + tail
 
     def _emit_until(self, stop: int) -> list[Segment]:
         path, p = [], stop

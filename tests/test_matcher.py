@@ -70,17 +70,29 @@ def expected(words):
 
 
 def expected_segments(words):
-    """(action, first, stop) the policy gives a string of some action: the most specific
-    acceptor — split after the longest leading walk when that one-shot still accepts the rest."""
+    """(action, first, stop) the policy gives a string of some action (tokens of equal
+    duration, as tokens_of makes them): the most specific acceptor — split after the longest
+    leading walk, and before the longest trailing walk longer than what it leaves, when that
+    one-shot still accepts the rest."""
     whole = expected(words)
     cyclic = {a.name for a in COMPILED.library.actions if a.cyclic}
-    if whole not in cyclic:
-        for k in range(len(words) - 1, 0, -1):
-            walks = [a for a in accepting(words[:k]) if a in cyclic]
-            if walks and whole in accepting(words[k:]):
-                walk = NAMES[AUTO.most_specific(np.array([NAMES.index(a) for a in walks]))]
-                return [(walk, 0, k), (expected(words[k:]), k, len(words))]
-    return [(whole, 0, len(words))]
+
+    def walk(part):
+        walks = [a for a in accepting(part) if a in cyclic]
+        return NAMES[AUTO.most_specific(np.array([NAMES.index(a) for a in walks]))] if walks else None
+
+    if whole in cyclic:
+        return [(whole, 0, len(words))]
+    lo, hi, head, tail = 0, len(words), [], []
+    for k in range(len(words) - 1, 0, -1):
+        if walk(words[:k]) and whole in accepting(words[k:]):
+            head, lo = [(walk(words[:k]), 0, k)], k
+            break
+    for k in range(lo + 1, hi):
+        if walk(words[k:]) and whole in accepting(words[lo:k]) and hi - k > k - lo:
+            tail, hi = [(walk(words[k:]), k, len(words))], k
+            break
+    return head + [(expected(words[lo:hi]) if head or tail else whole, lo, hi)] + tail
 
 
 @pytest.mark.parametrize("name", NAMES)
