@@ -31,7 +31,6 @@ one-track :class:`~doodle.model.Doodle`; everything is seeded.
 
 from __future__ import annotations
 
-import itertools
 import math
 from dataclasses import dataclass, fields, replace
 
@@ -39,6 +38,7 @@ import numpy as np
 
 from doodle import quat
 from doodle.model import Doodle, Track
+from doodle.synth import min_jerk
 
 UNIT = 0.1  # metres per gesture unit at size 1
 STEP = 0.075  # metres travelled per step of a bobbed walk at size 1
@@ -218,8 +218,7 @@ def _movement_timing(path: np.ndarray, tau: np.ndarray) -> np.ndarray:
     curvature = turn / np.maximum(ds, 1e-12)
     weight = ds * (curvature + 2.0 / total) ** (1.0 / 3.0)  # time per step under the power law
     w = np.concatenate([[0.0], np.cumsum(weight)]) / weight.sum()
-    s = tau**3 * (10 + tau * (-15 + 6 * tau))
-    idx = np.interp(s, w, np.arange(len(path)))
+    idx = np.interp(min_jerk(tau), w, np.arange(len(path)))
     lo = np.minimum(idx.astype(int), len(path) - 2)
     f = (idx - lo)[:, None]
     return path[lo] * (1 - f) + path[lo + 1] * f
@@ -230,7 +229,6 @@ class _Piece:
     start: float
     duration: float
     path: np.ndarray | None  # dense path in figurine units (None: rest)
-    spin: float = 0.0  # radians turned about +x over the piece (a flip)
     walk: bool = False
 
 
@@ -249,12 +247,12 @@ def _pieces(actions, style: Style, rng: np.random.Generator):
             spans.append((name, begin, t))
             continue
         if gesture.movements == ("jump",):
-            moves = [(_jump_path(style.arc), gesture.durations[0], 0.0)]
+            moves = [(_jump_path(style.arc), gesture.durations[0])]
         else:
-            moves = [(_round_corners(np.array(m)), d, 0.0) for m, d in zip(gesture.movements, gesture.durations)]
-        for j, (path, duration, spin) in enumerate(moves):
+            moves = [(_round_corners(np.array(m)), d) for m, d in zip(gesture.movements, gesture.durations)]
+        for j, (path, duration) in enumerate(moves):
             duration *= style.tempo * (0.9 + 0.2 * rng.random()) * math.sqrt(style.size)
-            pieces.append(_Piece(t, duration, path, spin, gesture.walk))
+            pieces.append(_Piece(t, duration, path, gesture.walk))
             t += duration
             if j < len(moves) - 1:  # the hand stops where the movement ends
                 hold = 0.025 * style.tempo * rng.random()
@@ -296,16 +294,14 @@ def perform(actions, style: Style = Style(), seed: int = 0, name: str = "c0") ->
     yaw = np.array([0.0, math.sin(heading / 2), 0.0, math.cos(heading / 2)])
     scale = UNIT * style.size
     p = np.zeros((n, 3))  # figurine-frame displacement from the start, metres
-    spin = np.zeros(n)
     moving = np.zeros(n)
-    here, turned = np.zeros(3), 0.0
+    here = np.zeros(3)
     for piece in pieces:
         inside = (t >= piece.start) & (t < piece.start + piece.duration)
         if piece is pieces[-1]:
             inside |= t >= piece.start
         if piece.path is None:
             p[inside] = here
-            spin[inside] = turned
             continue
         tau = np.clip((t[inside] - piece.start) / piece.duration, 0, 1)
         along = (_movement_timing(piece.path, tau) - piece.path[0]) * scale  # movements continue from here
@@ -314,26 +310,18 @@ def perform(actions, style: Style = Style(), seed: int = 0, name: str = "c0") ->
             steps = max(1, round(travelled[-1] / (STEP * style.size)))  # it lands at the end
             along[:, 1] += style.bob * np.abs(np.sin(math.pi * steps * travelled / max(travelled[-1], 1e-12)))
         p[inside] = here + along
-        s = tau**3 * (10 + tau * (-15 + 6 * tau))
-        spin[inside] = turned + piece.spin * s
         moving[inside] = np.sin(math.pi * tau) ** 2
-        here, turned = here + (piece.path[-1] - piece.path[0]) * scale, turned + piece.spin
-    # orientation: heading, the flips, the prop's tilt in the hand, the wobble, noise
+        here = here + (piece.path[-1] - piece.path[0]) * scale
+    # orientation: heading, the prop's tilt in the hand, the wobble, noise
     tilt_axis = rng.normal(size=3)
     tilt_axis[1] = 0.0
     tilt_axis /= max(np.linalg.norm(tilt_axis), 1e-9)
     tilt = quat.exp(np.tile(tilt_axis * math.radians(style.tilt), (n, 1)))
     wobble = _wobble(t, style.wobble, rng) * (1 / 3 + 2 / 3 * moving)[:, None]
     noise = rng.normal(0.0, style.jitter / 0.1, (n, 3))
-    flips = quat.exp(np.outer(spin, [1.0, 0.0, 0.0]))
-    body = quat.multiply(np.tile(yaw, (n, 1)), flips)  # the figurine's intended frame
-    q = quat.multiply(quat.multiply(body, tilt), quat.exp(wobble + noise))
+    q = quat.multiply(quat.multiply(np.tile(yaw, (n, 1)), tilt), quat.exp(wobble + noise))
     world = quat.rotate(np.tile(yaw, (n, 1)), p) + np.array([0.0, 1.0, 0.0])
     world += rng.normal(0.0, style.jitter, (n, 3))
     track = Track(name, t, world, quat.make_continuous(q), np.ones(n, dtype=bool))
     return Doodle((track,), float(style.rate), "vive-controller", f"<performer {style.label()}>"), spans
 
-
-def scenes(names_list, styles, takes: int = 3):
-    """(style, take, actions) for every style × take × action list (the benchmark's loop)."""
-    return [(s, k, a) for s, k, a in itertools.product(styles, range(takes), names_list)]

@@ -11,7 +11,7 @@ from doodle.tokens import CODES
 from grammar.automata import DFA, check_language, compile_expression, intersection_witness, sample, shortest
 from grammar.constraints import parse_constraints
 from grammar.expr import parse
-from grammar.matcher import MAX_COUNTED, Automaton, string_counts
+from grammar.matcher import Automaton
 from grammar.shapes import ShapeSet, load_paths, shape_set
 from library.manifest import ActionDef, Library
 
@@ -147,7 +147,7 @@ def swallowed(compiled: Compiled, strings: int = 200, least: float = 0.05, seed:
     when another action is chosen on at least ``least`` of them, with the shortest string.
     """
     names, dfas = compiled.library.names, compiled.dfas
-    sizes = [string_counts(d, MAX_COUNTED).sum() for d in dfas]
+    auto = compiled.automaton()
     rng = np.random.default_rng(seed)
     found = []
     for i, name in enumerate(names):
@@ -155,8 +155,7 @@ def swallowed(compiled: Compiled, strings: int = 200, least: float = 0.05, seed:
         taken: dict[int, list[tuple[str, ...]]] = {}
         for words in pool:
             codes = [CODES[w] for w in words]
-            takers = [j for j in range(len(names)) if dfas[j].accepts(codes)]
-            winner = min(takers, key=lambda j: (sizes[j], j))
+            winner = auto.most_specific(np.array([j for j in range(len(names)) if dfas[j].accepts(codes)]))
             if winner != i:
                 taken.setdefault(winner, []).append(words)
         for j, lost in taken.items():

@@ -82,7 +82,7 @@ def _insertion_closure(dfa: DFA, cap: float) -> np.ndarray:
     return reach
 
 
-def string_counts(dfa: DFA, longest: int) -> np.ndarray:
+def _string_counts(dfa: DFA, longest: int) -> np.ndarray:
     """Number of accepted strings of each length 0..longest (as floats: they grow fast)."""
     ways = np.zeros(dfa.size)
     ways[0] = 1.0
@@ -191,7 +191,7 @@ class Automaton:
             self.step_src.append(src[order])
             self.step_off.append(np.searchsorted(dst[order], states))
             self.step_cost.append(cost[order])
-        self.sizes_counted = np.array([string_counts(d, MAX_COUNTED).sum() for d in dfas])  # specificity
+        self.sizes_counted = np.array([_string_counts(d, MAX_COUNTED).sum() for d in dfas])  # specificity
 
     def most_specific(self, candidates: np.ndarray) -> int:
         """Among candidate actions, the one with the narrowest language: the fewest accepted
