@@ -7,9 +7,9 @@ import time
 import numpy as np
 
 from bench.timing import best_of
-from doodle.pipeline import load_actions, recognize, track_automata
-from doodle.replay import replay
-from doodle.synth import stroke, synth_doodle
+from doodle.app.pipeline import load_actions, recognize, track_automata
+from doodle.app.replay import replay
+from doodle.synth.strokes import stroke, synth_doodle
 from grammar.contexter import with_interactions
 
 FACING, BACK = (0.0, 0.0, 0.0, 1.0), (0.0, 1.0, 0.0, 0.0)

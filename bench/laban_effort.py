@@ -63,7 +63,7 @@ def _real(model) -> None:
     if not files:
         print(f"Real repetitions: recordings not found under {VIVE}")
         return
-    from doodle.csvimport import read_csv
+    from doodle.input.csvimport import read_csv
 
     by_gesture = collections.defaultdict(list)
     for path in files:

@@ -20,8 +20,8 @@ from pathlib import Path
 
 import numpy as np
 
-from doodle.csvimport import read_csv
-from doodle.model import Track
+from doodle.input.csvimport import read_csv
+from doodle.core.model import Track
 from grammar import shapes
 from grammar.learn import _automaton, _dtw_cost, _run, learn, token_string
 
@@ -161,7 +161,7 @@ def _continuous(data, users, classes, learned, pause=1.0, seed=0) -> None:
     """Streams: each user's held-out recordings (ex_3, ex_4 of every class) in a shuffled
     order, each translated to start where the previous ended, joined by a still pause with
     tracking noise and a 0.4 s move; recognised by the Matcher with the learned actions."""
-    from doodle.segmenter import tokenize
+    from doodle.input.segmenter import tokenize
     from grammar.matcher import match
     from grammar.library import compile_library
     from library.manifest import ActionDef, Library

@@ -15,8 +15,8 @@ import time
 
 import numpy as np
 
-from doodle.pipeline import load_actions
-from doodle.tokens import CODES, Token
+from doodle.app.pipeline import load_actions
+from doodle.core.tokens import CODES, Token
 from grammar.automata import sample
 from grammar.library import compile_library, overlaps
 from grammar.matcher import Matcher

@@ -1,8 +1,8 @@
 """Recognition across performers: the built-in library read on a grid of performer styles.
 
-Scenes come from :mod:`doodle.performers` — gestures played as continuous movements, not the
+Scenes come from :mod:`doodle.synth.performers` — gestures played as continuous movements, not the
 token-per-stroke performer the recogniser was built around — over the style grid
-(:func:`doodle.performers.style_grid`: size ×0.5–×2, tempo ×0.6–×1.6, pauses 0–0.8 s, 60–144
+(:func:`doodle.synth.performers.style_grid`: size ×0.5–×2, tempo ×0.6–×1.6, pauses 0–0.8 s, 60–144
 Hz, prop tilted 10–20° in the hand, wobble 2–5°, jitter 0.3–1 mm, walks bobbed 4–10 mm per
 step, jump arcs from "up, over, down" to "forward through the top", and three performers
 combining several). A scene is read *exactly* when ``doodle recognize``'s actions, Idle left
@@ -13,7 +13,7 @@ alone (Idle, action, Idle) and inside a sequence (Idle, Walk, action, Side Walk 
 over 2 takes per style; the most common misreadings; and, beside them in the same run, the
 same scenes read by the Segmenter without its deliberate-motion stage (no levelling, no
 holds or blips absorbed; the Matcher as it is now). Then the main example played the way
-the recogniser was built around, one minimum-jerk stroke per token (:mod:`doodle.synth`),
+the recogniser was built around, one minimum-jerk stroke per token (:mod:`doodle.synth.strokes`),
 over size, tempo, noise and rate. Two worker processes, BLAS on one thread. Draws ``out/bench/performers.png``
 (style × action, alone and in a sequence, coloured by the exact rate). ``python -m bench.performers [--quick]``.
 """
@@ -29,9 +29,9 @@ from pathlib import Path
 
 import numpy as np
 
-from doodle.performers import GESTURES, MAIN_EXAMPLE, perform, style_grid
-from doodle.pipeline import load_actions, recognize
-from doodle.segmenter import SegmenterParams
+from doodle.synth.performers import GESTURES, MAIN_EXAMPLE, perform, style_grid
+from doodle.app.pipeline import load_actions, recognize
+from doodle.input.segmenter import SegmenterParams
 
 RAW = SegmenterParams(pause_s=0.0, significance=0.0, min_extent_s=0.0, level_cap=0.0)
 ACTIONS = [a for a in GESTURES if a != "Idle"]
@@ -94,9 +94,9 @@ def _demo():
 
 def stroke_performer(compiled) -> tuple[float, float, Counter]:
     """The main example as ``examples/make_demo.py`` plays it — one minimum-jerk stroke per
-    token (:mod:`doodle.synth`) — over size × tempo × tracking noise × rate, 2 takes each:
+    token (:mod:`doodle.synth.strokes`) — over size × tempo × tracking noise × rate, 2 takes each:
     the exact rate, beside the Segmenter without its deliberate-motion stage."""
-    from doodle.synth import synth_doodle
+    from doodle.synth.strokes import synth_doodle
 
     demo = _demo()
     want = [a for a in demo.FIG_4_7 if a != "Idle"]
@@ -117,7 +117,7 @@ def held_out(compiled) -> tuple[float, float]:
     """The stroke-per-token performer with settings not looked at while the constants of
     the deliberate-motion stage were chosen: 60/120 Hz, ±25 % stroke variation, 1 mm
     tremor, 1 cm drift, 3–4.6° wobble, tempo ×0.7/×1.4, size ×0.6/×1.7, 3 takes each."""
-    from doodle.synth import synth_doodle
+    from doodle.synth.strokes import synth_doodle
 
     demo = _demo()
     want = [a for a in demo.FIG_4_7 if a != "Idle"]
@@ -135,7 +135,7 @@ def held_out(compiled) -> tuple[float, float]:
 def main(quick: bool = False) -> dict:
     styles = style_grid()
     takes_main, takes_action = (2, 1) if quick else (3, 2)
-    print("Recognition across performer styles (doodle.performers; exact = the intended actions, Idle aside)")
+    print("Recognition across performer styles (doodle.synth.performers; exact = the intended actions, Idle aside)")
     with ProcessPoolExecutor(max_workers=2) as pool:
         rows = list(pool.map(_one_style, [(s, takes_main, takes_action) for s in styles]))
     misread = sum((r["misread"] for r in rows), Counter())
@@ -161,7 +161,7 @@ def main(quick: bool = False) -> dict:
     worst = min(style_rates, key=style_rates.get)
     print(f"  worst style (main example and actions alone together): {worst} {style_rates[worst]:.2f} (target ≥ 0.80)")
     ours, raw, stroke_misread = stroke_performer(load_actions())
-    print(f"  the main example played one stroke per token (doodle.synth, as the demo), size 0.5–2 × tempo 0.6–1.6 × "
+    print(f"  the main example played one stroke per token (doodle.synth.strokes, as the demo), size 0.5–2 × tempo 0.6–1.6 × "
           f"noise 0.3–1 mm × 90/144 Hz: exact {ours:.3f}; without the stage: {raw:.3f}")
     ours, raw = held_out(load_actions())
     print(f"  held out — the same performer with settings not looked at while choosing the constants (60/120 Hz, "

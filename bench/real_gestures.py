@@ -13,8 +13,8 @@ from pathlib import Path
 
 import numpy as np
 
-from doodle.csvimport import read_csv
-from doodle.segmenter import SegmenterParams, tokenize_doodle
+from doodle.input.csvimport import read_csv
+from doodle.input.segmenter import SegmenterParams, tokenize_doodle
 
 ROOT = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "vive-gestures"
 

@@ -4,15 +4,15 @@
 import time
 from pathlib import Path
 
-from doodle.loader import load
-from doodle.pipeline import compile_doodle
+from doodle.input.loader import load
+from doodle.app.pipeline import compile_doodle
 
 DEMO = Path(__file__).resolve().parents[1] / "examples" / "demo.doodle"
 
 
 def main() -> None:
-    from doodle import render
-    from doodle.errors import DoodleError
+    from doodle.app import render
+    from doodle.core.errors import DoodleError
 
     try:
         render.load_pyrender()

@@ -6,10 +6,10 @@ from pathlib import Path
 
 import numpy as np
 
-from doodle.loader import load
-from doodle.model import Doodle, Track
-from doodle.pipeline import load_actions
-from doodle.replay import replay
+from doodle.input.loader import load
+from doodle.core.model import Doodle, Track
+from doodle.app.pipeline import load_actions
+from doodle.app.replay import replay
 
 DEMO = Path(__file__).resolve().parents[1] / "examples" / "demo.doodle"
 
@@ -43,7 +43,7 @@ def main() -> None:
 def _segmenter_only(doodle) -> np.ndarray:
     import time
 
-    from doodle.segmenter import Segmenter
+    from doodle.input.segmenter import Segmenter
 
     segs = [Segmenter(doodle.rate, name=tr.name) for tr in doodle.tracks]
     costs = np.empty(len(doodle.t))

@@ -10,8 +10,8 @@ import time
 
 import numpy as np
 
-from doodle.segmenter import Segmenter, tokenize
-from doodle.synth import stroke, synth_track
+from doodle.input.segmenter import Segmenter, tokenize
+from doodle.synth.strokes import stroke, synth_track
 
 HOUR = 3600.0
 RATE = 90.0

@@ -1,1 +1,3 @@
-"""The input side of spatial motion doodles: data model, files, signals, the Segmenter, the CLI."""
+"""Spatial motion doodles: the ground floor (:mod:`doodle.core`), the input side
+(:mod:`doodle.input`), the seeded performers (:mod:`doodle.synth`) and the application
+(:mod:`doodle.app`: compile pipeline, recorder, replay, render, CLI)."""

@@ -1,4 +1,4 @@
-"""Regenerate examples/demo.doodle: the thesis's main example, performed by doodle.synth.
+"""Regenerate examples/demo.doodle: the thesis's main example, performed by doodle.synth.strokes.
 
 Thesis Fig. 4.7: Idle, Side Walk, Idle, Walk, Idle, Jump, Idle, Walk, Idle, Stomp — a
 figurine waits, side-steps to its left, walks forward, hops forward (up, up-and-forward,
@@ -7,8 +7,8 @@ down-and-forward, down), walks on, and stomps in place. Run: python examples/mak
 
 from pathlib import Path
 
-from doodle.fileformat import write_doodle
-from doodle.synth import stroke, synth_doodle
+from doodle.input.fileformat import write_doodle
+from doodle.synth.strokes import stroke, synth_doodle
 
 STROKES = [
     stroke("T_STILL", 0.8),  # Idle

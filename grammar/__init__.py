@@ -1,1 +1,1 @@
-"""The motion-token language: expressions, automata, the Matcher (later issues)."""
+"""The motion-token language: expressions, automata, the Matcher, shapes, the Contexter."""

@@ -23,8 +23,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from doodle.errors import DoodleError
-from doodle.tokens import CODES, N_CODES, NAMES
+from doodle.core.errors import DoodleError
+from doodle.core.tokens import CODES, N_CODES, NAMES
 from grammar.expr import Alt, Cat, Repeat, Sym
 
 SYMBOLS = tuple(sorted(CODES.values()))  # the 53 token codes

@@ -5,7 +5,7 @@ characters' states at one time.
   or one of Hall's proxemic zones, computed from the characters' bounding-sphere radii:
   Intimate ``r_i + r_j``, Personal ``2(r_i + r_j)``, Social ``4(…)``, Public ``8(…)``. The
   distance is the thesis's full 3-D one. In doodle space a character is its figurine, so the
-  default radius is :data:`RADIUS` = 0.1 m (half the 20 cm prop of ``doodle.pipeline``).
+  default radius is :data:`RADIUS` = 0.1 m (half the 20 cm prop of ``doodle.app.pipeline``).
 * Field of view (§6.3.2): ``V(i, j, γ)`` holds when ``dot(unit(P_j − P_i), F_i) ≥ γ`` (i sees
   j), ``MV(i, j, β)`` when ``dot(F_i, F_j) ≤ β`` (they face each other for β < 0). ``F`` is
   the figurine's front (its local +z) projected on the ground plane and normalised; the
@@ -32,7 +32,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from doodle.errors import DoodleError
+from doodle.core.errors import DoodleError
 
 RADIUS = 0.1  # metres: bounding-sphere radius of a character in doodle (prop) space
 ZONES = {"intimate": 1.0, "personal": 2.0, "social": 4.0, "public": 8.0}  # × (r_i + r_j)

@@ -168,7 +168,7 @@ def relabel(segments: dict[str, list[Segment]], found: list[Found]) -> dict[str,
 
 def recognize_interactions(doodle, compiled, params=None, threshold: float = 2.0, radius: float | dict = RADIUS,
                            mode: str = "any") -> dict[str, list[Segment]]:
-    """Per track, the segments of :func:`doodle.pipeline.recognize` with the library's
+    """Per track, the segments of :func:`doodle.app.pipeline.recognize` with the library's
     interactions recognised across tracks (:class:`InteractionSegment` where they are).
 
     Roles that are ordinary actions are looked for among each track's segments; roles that
@@ -176,8 +176,8 @@ def recognize_interactions(doodle, compiled, params=None, threshold: float = 2.0
     ``T_STILL+``…) are matched on the track's tokens by a Matcher of their own, and where
     such an interaction is recognised its segment replaces the independent segments it
     covers (interactions take priority, §6.2.1)."""
-    from doodle.pipeline import recognize
-    from doodle.segmenter import SegmenterParams
+    from doodle.app.pipeline import recognize
+    from doodle.input.segmenter import SegmenterParams
 
     recognised = recognize(doodle, compiled, params or SegmenterParams(), threshold, interactions=False)
     return with_interactions(doodle, compiled, recognised, threshold, radius, mode)

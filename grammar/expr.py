@@ -1,6 +1,6 @@
 """Action expressions: regular expressions over motion tokens, parsed with lark.
 
-Syntax: token names (``T_Z``, ``R_N_X_Y``, ``T_STILL`` — see :mod:`doodle.tokens`),
+Syntax: token names (``T_Z``, ``R_N_X_Y``, ``T_STILL`` — see :mod:`doodle.core.tokens`),
 concatenation by juxtaposition, ``|`` alternation, postfix ``*`` ``+`` ``?`` and
 parentheses::
 
@@ -16,13 +16,13 @@ from dataclasses import dataclass
 
 from lark import Lark, Token, Transformer, UnexpectedEOF, UnexpectedInput
 
-from doodle.errors import DoodleError
-from doodle.tokens import CODES, NAMES
+from doodle.core.errors import DoodleError
+from doodle.core.tokens import CODES, NAMES
 
 
 @dataclass(frozen=True)
 class Sym:
-    code: int  # a token code of doodle.tokens
+    code: int  # a token code of doodle.core.tokens
 
 
 @dataclass(frozen=True)

@@ -33,10 +33,10 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from doodle import quat
-from doodle.errors import DoodleError
-from doodle.model import Track
-from doodle.segmenter import SegmenterParams, tokenize
+from doodle.core import quat
+from doodle.core.errors import DoodleError
+from doodle.core.model import Track
+from doodle.input.segmenter import SegmenterParams, tokenize
 from grammar import shapes
 
 POINTS = 128  # samples per example for the DTW average
@@ -282,7 +282,7 @@ def _automaton(expressions: list[str], cap: float):
 
 
 def _run(auto, string: tuple[str, ...]) -> np.ndarray:
-    from doodle.tokens import CODES
+    from doodle.core.tokens import CODES
 
     d = auto.initial.copy()
     for name in string:
@@ -310,7 +310,7 @@ def _edit_distance(dfa, string: tuple[str, ...], cap: float) -> float:
     """Edit distance (1 per insertion, deletion, substitution) from a token string to one
     DFA's language, capped — the Matcher's recurrence for one action without building its
     tables for every token."""
-    from doodle.tokens import CODES
+    from doodle.core.tokens import CODES
     from grammar.matcher import _insertion_closure
 
     reach = _insertion_closure(dfa, cap + 1.0)  # fewest insertions from p to r

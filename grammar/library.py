@@ -6,8 +6,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from doodle.errors import DoodleError
-from doodle.tokens import CODES
+from doodle.core.errors import DoodleError
+from doodle.core.tokens import CODES
 from grammar.automata import DFA, check_language, compile_expression, intersection_witness, sample, shortest
 from grammar.constraints import parse_constraints
 from grammar.expr import parse

@@ -57,7 +57,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from doodle.tokens import CODES, N_CODES, Token, signs_of
+from doodle.core.tokens import CODES, N_CODES, Token, signs_of
 from grammar.automata import DFA
 
 UNKNOWN = "unknown"

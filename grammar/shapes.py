@@ -113,7 +113,7 @@ FORMAT = 1
 
 def save_paths(path, paths: np.ndarray) -> None:
     """Write example paths (k, n, 3) to ``path`` (.npz, no pickles), atomically."""
-    from doodle.fileformat import atomic_path
+    from doodle.core.files import atomic_path
 
     with atomic_path(path) as tmp:
         with open(tmp, "wb") as f:
@@ -122,7 +122,7 @@ def save_paths(path, paths: np.ndarray) -> None:
 
 def load_paths(path, action: str = "") -> np.ndarray:
     """Example paths (k, n, 3) from a shape file; DoodleError naming the file and action."""
-    from doodle.errors import DoodleError
+    from doodle.core.errors import DoodleError
 
     where = f"{path}" + (f" (shape of action {action!r})" if action else "")
     try:
@@ -279,7 +279,7 @@ class Refiner:
         """The best (first, stop, action, edits) over windows starting in ``starts`` and
         ending in one of the ``ends`` intervals, or None when its shape distance is over
         ``strict`` × the action's rejection distance."""
-        from doodle.tokens import CODES
+        from doodle.core.tokens import CODES
 
         names = [k.name for k in self.tokens]
         auto = self.shapes.automaton

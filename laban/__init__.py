@@ -1,1 +1,1 @@
-"""Laban effort features and classifiers (later issues)."""
+"""Laban effort: kinematic features, feature selection, Naive Bayes and HMM classifiers, training data."""

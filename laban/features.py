@@ -41,7 +41,7 @@ from functools import lru_cache
 import numpy as np
 from numpy.lib.stride_tricks import as_strided
 
-from doodle import quat
+from doodle.core import quat
 
 WINDOW_S = 0.12  # s, Savitzky–Golay window (11 samples at 90 Hz)
 ORDER = 3  # cubic fits: up to the third derivative (jerk)

@@ -20,8 +20,8 @@ from pathlib import Path
 
 import numpy as np
 
-from doodle.errors import DoodleError
-from doodle.fileformat import atomic_write
+from doodle.core.errors import DoodleError
+from doodle.core.files import atomic_write
 from laban.bayes import Binary
 from laban.features import FEATURE_SETS, SUMMARY_NAMES
 from laban.hmm import HMMSet

@@ -15,7 +15,7 @@ def confusion_png(matrix, labels: list[str], path, title: str) -> Path:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from doodle.fileformat import atomic_write
+    from doodle.core.files import atomic_write
 
     m = np.asarray(matrix, dtype=float)
     share = m / np.maximum(m.sum(axis=1, keepdims=True), 1)

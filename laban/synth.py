@@ -29,7 +29,7 @@ Models, and where they come from
 * **Time** (sets the duration and the onset of the speed envelope g(τ), τ ∈ [0, 1]).
   *Sustained*: nominally 2.6–4.0 s; g rises and falls with minimum-jerk steps,
   ``g = s(τ/r)·s((1−τ)/r)`` with ``s`` the Flash & Hogan (1985) profile
-  (``doodle.synth.min_jerk``) and r ≈ 0.2–0.4: smooth, symmetric, no impulse anywhere.
+  (``doodle.core.profiles.min_jerk``) and r ≈ 0.2–0.4: smooth, symmetric, no impulse anywhere.
   *Sudden*: nominally 0.35–0.75 s, with an impulsive onset — the minimum-jerk rise takes
   only 5–20 % of the movement (15–150 ms) — so peak jerk is high and comes early (the
   thesis's "great impulse (jerk peak) at the beginning", §4.3). Durations also scale with
@@ -77,7 +77,7 @@ Models, and where they come from
   closer), ramp and onset fractions, drawing-plane tilt and yaw, handedness, grip and noise
   levels. Each take varies size, duration, aspect, plane and placement by ± ``vary``
   (5–12 %), and is framed by still pauses of 0.2–0.5 s before and after.
-* **Tremor, noise, clock** — as :mod:`doodle.synth`: physiological tremor as 2–3 sinusoids at
+* **Tremor, noise, clock** — as :mod:`doodle.synth.strokes`: physiological tremor as 2–3 sinusoids at
   8–12 Hz of 0.3–0.8 mm (and that over a 0.1 m lever in radians; Elble & Koller 1990),
   white tracking noise of 0.2–0.5 mm (Niehorster, Li & Lappe 2017), and a 90 Hz clock with
   ±10 % jitter per sample, t[0] = 0.
@@ -100,8 +100,8 @@ from functools import lru_cache
 import numpy as np
 from scipy.ndimage import gaussian_filter1d
 
-from doodle import quat
-from doodle.synth import ORIENTATION_LEVER, min_jerk
+from doodle.core import quat
+from doodle.core.profiles import ORIENTATION_LEVER, min_jerk
 from laban.efforts import DRIVES
 
 __all__ = ["PATTERNS", "Person", "person", "Example", "trajectory", "free_style", "dataset"]

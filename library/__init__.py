@@ -1,1 +1,1 @@
-"""The action library and its loader (later issues)."""
+"""The action library: definitions, the built-in clips, user libraries and their loader."""

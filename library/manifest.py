@@ -55,7 +55,7 @@ import tomllib
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
-from doodle.errors import DoodleError
+from doodle.core.errors import DoodleError
 
 BUILTIN = Path(__file__).resolve().parent / "builtin"
 RESERVED = {"unknown"}

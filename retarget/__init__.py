@@ -1,1 +1,1 @@
-"""Skeletons, BVH, terrain, trajectory transfer and stylisation (later issues)."""
+"""Skeletons and motion, BVH, terrain, trajectory transfer, animation stages, transitions, stylisation, IK and quality measures."""

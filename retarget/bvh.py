@@ -67,7 +67,7 @@ import numpy as np
 import pandas as pd
 from scipy.spatial.transform import Rotation
 
-from doodle.errors import DoodleError, where
+from doodle.core.errors import DoodleError, where
 from retarget.skeleton import POSITION_CHANNELS, ROTATION_CHANNELS, Motion, Skeleton
 
 __all__ = ["read_bvh", "read_bvh_with_unit", "guess_unit", "write_bvh", "format_bvh", "euler_to_quat"]
@@ -497,7 +497,7 @@ def write_bvh(path, motion: Motion, unit: float = 1.0, precision: int = 6) -> No
     be written faithfully (non-finite values, no frames, a joint without position
     channels whose translation differs from its offset, bad names or channels).
     """
-    from doodle.fileformat import atomic_write  # local import: keeps reading light
+    from doodle.core.files import atomic_write  # local import: keeps reading light
 
     text = format_bvh(motion, unit=unit, precision=precision, source=str(path))
     atomic_write(path, [text])

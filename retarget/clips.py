@@ -6,7 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from doodle.errors import DoodleError
+from doodle.core.errors import DoodleError
 from library.manifest import ROLES, ActionDef, Library
 from retarget.analysis import Stages, cycle_length, foot_contacts, guess_roles, stages
 from retarget.bvh import read_bvh

@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from doodle.arap import deform
+from doodle.core.arap import deform
 from retarget.analysis import guess_roles
 from retarget.feet import two_bone_ik
 from retarget.skeleton import Motion, forward_kinematics
@@ -47,7 +47,7 @@ def contact_weight(frames: int, frame: int, ease: int) -> np.ndarray:
 def arap_path(path: np.ndarray, frame: int, target, lo: int, hi: int) -> np.ndarray:
     """The path (n, 3) with ``path[frame]`` moved to ``target`` and the points between
     ``lo`` and ``hi`` (kept fixed) moved as rigidly as possible (eq. 6.7,
-    :func:`doodle.arap.deform`)."""
+    :func:`doodle.core.arap.deform`)."""
     path = np.asarray(path, dtype=float)
     lo, hi = max(0, lo), min(len(path) - 1, hi)
     out = path.copy()

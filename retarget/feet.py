@@ -19,7 +19,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from doodle import quat
+from doodle.core import quat
 from retarget.analysis import foot_contacts
 from retarget.skeleton import Motion, forward_kinematics
 

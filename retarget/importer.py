@@ -26,8 +26,8 @@ import tomllib
 from dataclasses import replace
 from pathlib import Path
 
-from doodle.errors import DoodleError
-from doodle.fileformat import atomic_write
+from doodle.core.errors import DoodleError
+from doodle.core.files import atomic_write
 from library.manifest import FLAGS, ActionDef, Library, builtin, format_library, manifest_path
 
 ALIASES = {

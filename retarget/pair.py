@@ -22,7 +22,7 @@ def heading(root_rotation) -> np.ndarray:
 def placement(first, second) -> tuple[float, float, float]:
     """``(x, z, turn)`` of the second character's root relative to the first at frame 0:
     metres to its right and in front of it, degrees its heading is turned from the first's —
-    the manifest's ``placement`` (``doodle.placement``)."""
+    the manifest's ``placement`` (``doodle.app.placement``)."""
     a, b = first.translations[0, 0], second.translations[0, 0]
     front = heading(first.rotations[0, 0])
     right = np.cross(front, UP)

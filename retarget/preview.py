@@ -15,7 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
-from doodle.fileformat import atomic_path
+from doodle.core.files import atomic_path
 from retarget.sheet import contact_sheet
 from retarget.skeleton import forward_kinematics
 

@@ -85,7 +85,7 @@ class Motion:
 
 def forward_kinematics(motion: Motion) -> tuple[np.ndarray, np.ndarray]:
     """World positions (F, J, 3) and world rotations (F, J, 4) of every joint."""
-    from doodle import quat
+    from doodle.core import quat
 
     sk = motion.skeleton
     f, j = motion.frames, len(sk)

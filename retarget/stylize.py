@@ -41,8 +41,8 @@ from scipy.interpolate import PchipInterpolator
 from scipy.ndimage import gaussian_filter1d
 from scipy.sparse import csr_matrix
 
-from doodle import quat
-from doodle.quat import make_continuous
+from doodle.core import quat
+from doodle.core.quat import make_continuous
 from retarget.analysis import Stages, foot_contacts, guess_roles, partition
 from retarget.feet import two_bone_ik
 from retarget.skeleton import Motion, forward_kinematics

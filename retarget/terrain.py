@@ -26,7 +26,7 @@ trimesh is used only to *load* mesh files (OBJ, PLY, GLB, STL…); nothing else 
 
 :func:`parse_terrain` turns a command-line spec into a terrain; :func:`sample_elevation`
 gives a real digital elevation model (matplotlib's bundled Jacksboro fault DEM) rescaled
-to a room-sized terrain. Every bad input raises :class:`doodle.errors.DoodleError` with a
+to a room-sized terrain. Every bad input raises :class:`doodle.core.errors.DoodleError` with a
 message that names the spec, file or field.
 """
 
@@ -39,7 +39,7 @@ from typing import Protocol, runtime_checkable
 
 import numpy as np
 
-from doodle.errors import DoodleError
+from doodle.core.errors import DoodleError
 
 __all__ = [
     "Terrain",

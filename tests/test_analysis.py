@@ -6,7 +6,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from doodle.errors import DoodleError
+from doodle.core.errors import DoodleError
 from library.manifest import load_library
 from retarget.analysis import (body_joints, cycle_length, cycle_period, foot_contacts, guess_roles, partition,
                                stages)
@@ -117,7 +117,7 @@ def test_import_bandai_normal_style_gives_a_usable_library(tmp_path, capsys):
     within 10 % of the hips' travel per cycle; the library recognises the demo doodle."""
     if not BANDAI.exists():
         pytest.skip("Bandai data not found")
-    from doodle.cli import main
+    from doodle.app.cli.main import main
 
     out = tmp_path / "bandai"
     assert main(["library", "import", str(BANDAI), "--name", "bandai", "--include", "*_normal_*", "-o", str(out)]) == 0

@@ -4,9 +4,9 @@ role is refused is dropped on both tracks — and the manifest's checks."""
 
 import pytest
 
-from doodle.errors import DoodleError
-from doodle.pipeline import load_actions, recognize
-from doodle.synth import stroke, synth_doodle
+from doodle.core.errors import DoodleError
+from doodle.app.pipeline import load_actions, recognize
+from doodle.synth.strokes import stroke, synth_doodle
 from grammar.constraints import Behaviour
 from grammar.contexter import InteractionSegment, Refused
 from library.manifest import format_library, load_library

@@ -5,7 +5,7 @@ import tomllib
 from pathlib import Path
 
 
-from doodle.cli import main
+from doodle.app.cli.main import main
 from library.manifest import BUILTIN, builtin
 from retarget.clips import load_clips
 

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from doodle.errors import DoodleError
+from doodle.core.errors import DoodleError
 from retarget.bvh import (_format_rows, euler_to_quat, format_bvh, guess_unit, read_bvh,
                           read_bvh_with_unit, write_bvh)
 from retarget.skeleton import end_site_positions, forward_kinematics

@@ -4,12 +4,12 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from doodle.calibration import calibrate
-from doodle.devices import apply_mount, calibrate_mount
-from doodle.errors import DoodleError
-from doodle.segmenter import SegmenterParams, tokenize
-from doodle.settings import read_calibration, write_calibration
-from doodle.synth import stroke, synth_track
+from doodle.input.calibration import calibrate
+from doodle.input.devices import apply_mount, calibrate_mount
+from doodle.core.errors import DoodleError
+from doodle.input.segmenter import SegmenterParams, tokenize
+from doodle.input.settings import read_calibration, write_calibration
+from doodle.synth.strokes import stroke, synth_track
 
 
 def test_mount_found_from_still_then_push():

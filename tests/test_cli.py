@@ -7,16 +7,16 @@ from pathlib import Path
 
 import pytest
 
-from doodle.cli import main
-from doodle.fileformat import write_doodle
-from doodle.synth import stroke, synth_doodle
+from doodle.app.cli.main import main
+from doodle.input.fileformat import write_doodle
+from doodle.synth.strokes import stroke, synth_doodle
 
 ROOT = Path(__file__).resolve().parents[1]
 DEMO = ROOT / "examples" / "demo.doodle"
 
 
 def run(*args):
-    return subprocess.run([sys.executable, "-m", "doodle.cli", *map(str, args)], capture_output=True, text=True,
+    return subprocess.run([sys.executable, "-m", "doodle.app.cli.main", *map(str, args)], capture_output=True, text=True,
                           cwd=ROOT, timeout=120)
 
 

@@ -7,10 +7,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from doodle.cli import main
-from doodle.fileformat import write_doodle
-from doodle.loader import load
-from doodle.synth import stroke, synth_doodle
+from doodle.app.cli.main import main
+from doodle.input.fileformat import write_doodle
+from doodle.input.loader import load
+from doodle.synth.strokes import stroke, synth_doodle
 from retarget.bvh import read_bvh
 from retarget.skeleton import end_site_positions, forward_kinematics
 
@@ -129,7 +129,7 @@ def test_two_bone_ik_reaches_its_target():
 def test_feet_are_pinned_and_above_the_ground():
     """Pinning contacts with IK cuts foot skating on the demo to a few cm/s, and nothing is
     under the ground."""
-    from doodle.pipeline import compile_doodle, quality
+    from doodle.app.pipeline import compile_doodle, quality
 
     doodle = load(DEMO)
     loose = quality(compile_doodle(doodle, pin=False)[0])
@@ -184,7 +184,7 @@ def test_preview_images(tmp_path):
 def test_gesture_retiming_follows_the_hand(tmp_path):
     """§5.3.3: with --retime gesture a one-shot clip advances with the hand's arc length:
     a stroke that is slow, then fast, plays the clip's first half over most of the time."""
-    from doodle.pipeline import gesture_timing
+    from doodle.app.pipeline import gesture_timing
     from retarget.trajectory import Span
 
     n = 100

@@ -48,7 +48,7 @@ def test_a_target_out_of_reach_gets_the_arm_pointing_at_it():
 def test_local_coordinates_are_rigid_invariants():
     from scipy.spatial.transform import Rotation
 
-    from doodle.arap import local_coordinates
+    from doodle.core.arap import local_coordinates
 
     rng = np.random.default_rng(4)
     p = np.cumsum(rng.normal(size=(20, 3)), axis=0)
@@ -60,7 +60,7 @@ def test_local_coordinates_are_rigid_invariants():
 def test_arap_path_reaches_the_target_and_keeps_the_shape():
     """Eq. 6.7 on an arc: the contact point meets the target, the window's ends stay, and the
     neighbour-frame coordinates (α, β) change less than under a plain eased shift."""
-    from doodle.arap import local_coordinates
+    from doodle.core.arap import local_coordinates
     from retarget.contact import arap_path, contact_weight
 
     s = np.linspace(0, np.pi, 41)

@@ -7,8 +7,8 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from doodle.errors import DoodleError
-from doodle.synth import stroke, synth_doodle
+from doodle.core.errors import DoodleError
+from doodle.synth.strokes import stroke, synth_doodle
 from grammar.constraints import (Behaviour, Constraint, State, ground_front, mutual_view, parse_constraint,
                                  sees, within, zone_distance)
 from grammar.contexter import Contexter, InteractionSegment, recognize_interactions
@@ -256,7 +256,7 @@ def test_the_slapping_hand_meets_the_head():
     """Placement and contact (§6.2.2): the characters are brought within reach, and at the
     contact frame the slapper's right hand is on the slapped character's head (its surface,
     within 2 cm)."""
-    from doodle.pipeline import HEAD_RADIUS, compile_doodle
+    from doodle.app.pipeline import HEAD_RADIUS, compile_doodle
     from retarget.analysis import guess_roles
     from retarget.skeleton import forward_kinematics
 
@@ -274,9 +274,9 @@ def test_a_two_character_slap_scene_compiles_with_the_interaction(tmp_path, caps
     Slap and Slapped clips, the interaction in report.json and in `doodle recognize`."""
     import json
 
-    from doodle.cli import main
-    from doodle.fileformat import write_doodle
-    from doodle.pipeline import MEET_DISTANCE
+    from doodle.app.cli.main import main
+    from doodle.input.fileformat import write_doodle
+    from doodle.app.pipeline import MEET_DISTANCE
 
     path = tmp_path / "slap.doodle"
     write_doodle(path, scene(["T_N_Z", "T_Z"], [], 0.3))
@@ -303,8 +303,8 @@ def test_streaming_contexter_equals_batch(compiled):
     """Tracks read in parallel (``doodle replay``): the interactions reported as the streams
     go are those the batch Contexter finds, each after both roles have ended, and none when
     the characters are apart."""
-    from doodle.pipeline import track_automata
-    from doodle.replay import replay
+    from doodle.app.pipeline import track_automata
+    from doodle.app.replay import replay
 
     lib = COMPILED if compiled == "ordinary roles" else BUILTIN
     # ordinary roles: three slaps in a row, so segments decided long ago are forgotten on the way
@@ -321,8 +321,8 @@ def test_streaming_contexter_equals_batch(compiled):
 
 
 def test_replay_command_shows_interactions(tmp_path, capsys):
-    from doodle.cli import main
-    from doodle.fileformat import write_doodle
+    from doodle.app.cli.main import main
+    from doodle.input.fileformat import write_doodle
 
     path = tmp_path / "slap.doodle"
     write_doodle(path, scene(["T_N_Z", "T_Z"], [], 0.3))
@@ -337,8 +337,8 @@ def test_placement_walks_in_and_back_with_time_inserted(tmp_path, capsys):
     inserted into both characters' timelines, which stay in step."""
     import json
 
-    from doodle.cli import main
-    from doodle.fileformat import write_doodle
+    from doodle.app.cli.main import main
+    from doodle.input.fileformat import write_doodle
     from retarget.bvh import read_bvh
 
     lib = tmp_path / "lib"
@@ -370,8 +370,8 @@ def test_placement_walks_in_and_back_with_time_inserted(tmp_path, capsys):
 
 
 def test_place_moves_turns_and_keeps_tracks_in_step():
-    from doodle.pipeline import _interaction_pairs, recognize
-    from doodle.placement import place
+    from doodle.app.pipeline import _interaction_pairs, recognize
+    from doodle.app.placement import place
 
     doodle = scene(["T_N_Z", "T_Z"], [], 0.3, q1=(0.0, 0.9239, 0.0, -0.3827))  # Pierrot turned 45° from her
     recognised = recognize(doodle, BUILTIN)
@@ -425,8 +425,8 @@ def test_placement_read_from_a_two_character_clip(tmp_path):
     two-character clip (one BVH per character) places them when the interaction is played."""
     import json
 
-    from doodle.cli import main
-    from doodle.fileformat import write_doodle
+    from doodle.app.cli.main import main
+    from doodle.input.fileformat import write_doodle
     from retarget.bvh import read_bvh
     from retarget.pair import placement
 

@@ -4,8 +4,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.spatial.transform import Rotation
 
-from doodle.conventions import CONVENTIONS, convention_matrix, from_ours, to_ours
-from doodle.errors import DoodleError
+from doodle.input.conventions import CONVENTIONS, convention_matrix, from_ours, to_ours
+from doodle.core.errors import DoodleError
 
 NAMES = sorted(CONVENTIONS)
 

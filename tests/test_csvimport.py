@@ -3,8 +3,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from doodle.csvimport import parse_column_map, read_csv
-from doodle.errors import DoodleError
+from doodle.input.csvimport import parse_column_map, read_csv
+from doodle.core.errors import DoodleError
 
 DATA = Path(__file__).resolve().parents[1] / ".." / "shared" / "data" / "vive-gestures"
 

@@ -11,10 +11,10 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from doodle import fileformat
-from doodle.errors import DoodleError
-from doodle.fileformat import DoodleWriter, read_doodle, write_doodle
-from doodle.model import Doodle, Track
+from doodle.input import fileformat
+from doodle.core.errors import DoodleError
+from doodle.input.fileformat import DoodleWriter, read_doodle, write_doodle
+from doodle.core.model import Doodle, Track
 
 REPO = Path(__file__).resolve().parents[1]
 
@@ -360,7 +360,7 @@ CHILD = textwrap.dedent(
     """
     import os, sys, time
     sys.path.insert(0, sys.argv[1])
-    from doodle.fileformat import DoodleWriter
+    from doodle.input.fileformat import DoodleWriter
     path, progress = sys.argv[2], sys.argv[3]
     fd = os.open(progress, os.O_WRONLY | os.O_CREAT | os.O_APPEND)
     with DoodleWriter(path, [("c0", "right_hand", "S1"), ("c1", "", "")], 90, "synthetic") as w:

@@ -9,8 +9,8 @@ import pytest
 from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
-from doodle.errors import DoodleError
-from doodle.tokens import CODES
+from doodle.core.errors import DoodleError
+from doodle.core.tokens import CODES
 from grammar.automata import check_language, compile_expression, intersection_witness, sample, shortest
 from grammar.expr import Alt, Cat, Repeat, Sym, parse, to_text
 from grammar.matcher import Automaton, edit_distance, substitution_costs

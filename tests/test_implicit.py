@@ -6,10 +6,10 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from doodle.errors import DoodleError
-from doodle.model import Doodle
-from doodle.pipeline import load_actions, recognize
-from grammar.implicit import implicit_action, intended_tokens, reach
+from doodle.core.errors import DoodleError
+from doodle.core.model import Doodle
+from doodle.app.pipeline import load_actions, recognize
+from doodle.synth.implicit import implicit_action, intended_tokens, reach
 
 COMPILED = load_actions()
 ACTIONS = COMPILED.library.names
@@ -57,9 +57,9 @@ def test_end_orientation_is_met_without_a_jump(action, turn):
     the action."""
     from scipy.spatial.transform import Rotation
 
-    from doodle.model import Doodle
-    from doodle.pipeline import recognize
-    from grammar.implicit import end_orientation
+    from doodle.core.model import Doodle
+    from doodle.app.pipeline import recognize
+    from doodle.synth.implicit import end_orientation
 
     track = implicit_action(COMPILED, action)
     goal_q = (Rotation.from_euler("y", turn, degrees=True) * Rotation.from_quat(track.q[-1])).as_quat()

@@ -6,7 +6,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.signal import savgol_filter
 
-from doodle import quat
+from doodle.core import quat
 from laban import features as F
 from laban.features import FEATURE_SETS, SUMMARY_NAMES, kinematics, sequence, summary
 from laban.selection import normalise, ranking, relevance

@@ -12,8 +12,8 @@ import pytest
 from hmmlearn.hmm import GaussianHMM
 from sklearn.naive_bayes import GaussianNB
 
-from doodle.cli import main
-from doodle.errors import DoodleError
+from doodle.app.cli.main import main
+from doodle.core.errors import DoodleError
 from laban import synth
 from laban.bayes import fit_binary, select
 from laban.classify import NEUTRAL, quality
@@ -148,7 +148,7 @@ def test_real_repetitions_get_consistent_qualities(vive_files):
     """The same user repeating the same gesture should get the same Time and Weight: the
     share of agreeing pairs of repetitions beats the agreement of independent labels with
     the same overall shares (chance)."""
-    from doodle.csvimport import read_csv
+    from doodle.input.csvimport import read_csv
 
     by_gesture = collections.defaultdict(list)
     for path in vive_files[::2]:
@@ -187,8 +187,8 @@ def test_compile_reports_recognised_effort(tmp_path):
 
 
 def test_laban_commands(tmp_path, capsys):
-    from doodle.fileformat import write_doodle
-    from doodle.model import Doodle, Track
+    from doodle.input.fileformat import write_doodle
+    from doodle.core.model import Doodle, Track
 
     x = synth.dataset(people=1, repeats=1, seed=9, patterns=("circle",))
     files = []

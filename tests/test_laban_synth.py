@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 from scipy.signal import savgol_filter
 
-from doodle import quat
+from doodle.core import quat
 from laban import synth
 from laban.efforts import DRIVES, ELEMENTS, FACTORS
 

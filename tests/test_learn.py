@@ -8,10 +8,10 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from doodle.cli import main
-from doodle.errors import DoodleError
-from doodle.synth import stroke, synth_doodle
-from doodle.tokens import NAMES
+from doodle.app.cli.main import main
+from doodle.core.errors import DoodleError
+from doodle.synth.strokes import stroke, synth_doodle
+from doodle.core.tokens import NAMES
 from grammar.learn import _dtw_path, dba, distances, expression_of, learn
 
 VIVE = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "vive-gestures"
@@ -163,7 +163,7 @@ def test_learn_command_bad_input(tmp_path, capsys):
 def test_tolerance_field_and_per_action_limits(tmp_path):
     from grammar.library import compile_library
     from grammar.matcher import match
-    from doodle.tokens import Token
+    from doodle.core.tokens import Token
     from library.manifest import format_library, load_library
 
     folder = tmp_path / "lib"
@@ -189,8 +189,8 @@ def test_tolerance_field_and_per_action_limits(tmp_path):
 def test_record_wizard_with_a_synthetic_source(tmp_path, monkeypatch, capsys):
     """`doodle learn NAME --record` through the recording loop: three takes, each between two
     trigger presses, then learned and saved (a synthetic source stands in for SteamVR)."""
-    from doodle import cli_learn
-    from doodle.sources import SyntheticSource
+    from doodle.app.cli import learn as cli_learn
+    from doodle.input.sources import SyntheticSource
 
     seeds = iter(range(11, 30))
 
@@ -214,14 +214,14 @@ def test_record_wizard_with_a_synthetic_source(tmp_path, monkeypatch, capsys):
             pass
 
     sources = OneTakePerSource()
-    real_record = __import__("doodle.recorder", fromlist=["record"]).record
+    real_record = __import__("doodle.app.recorder", fromlist=["record"]).record
 
     def record_fresh(source, path, **kw):
         sources.current = fake_source()
         return real_record(sources, path, clock=lambda: 0.0, sleep=lambda s: None, **kw)
 
     monkeypatch.setattr(cli_learn, "open_source", lambda: sources)
-    monkeypatch.setattr("doodle.recorder.record", record_fresh)
+    monkeypatch.setattr("doodle.app.recorder.record", record_fresh)
     monkeypatch.setattr(cli_learn, "COUNTDOWN", 0)
     lib = tmp_path / "wiz"
     assert main(["learn", "Hop", "--record", "--library", str(lib)]) == 0

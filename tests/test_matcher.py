@@ -8,13 +8,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from doodle.cli import main
-from doodle.errors import DoodleError
-from doodle.model import Doodle
-from doodle.pipeline import load_actions, recognize
-from doodle.segmenter import SegmenterParams
-from doodle.synth import perform, synth_track
-from doodle.tokens import CODES, Token
+from doodle.app.cli.main import main
+from doodle.core.errors import DoodleError
+from doodle.core.model import Doodle
+from doodle.app.pipeline import load_actions, recognize
+from doodle.input.segmenter import SegmenterParams
+from doodle.synth.strokes import perform, synth_track
+from doodle.core.tokens import CODES, Token
 from grammar.automata import sample
 from grammar.library import overlaps
 from grammar.matcher import UNKNOWN, Matcher, edit_distance, match
@@ -256,7 +256,7 @@ def test_user_library_extends_and_overrides(tmp_path, capsys):
     only = load_actions(folder, use_builtin=False)
     assert only.library.names == ["Spin", "Stomp"]
     spin = tmp_path / "spin.doodle"
-    from doodle.fileformat import write_doodle
+    from doodle.input.fileformat import write_doodle
 
     write_doodle(spin, Doodle((perform(["T_STILL", "R_Y", "T_STILL"], seed=3),), 90.0))
     assert main(["recognize", "--json", "--library", str(folder), "--no-builtin", str(spin)]) == 0

@@ -1,5 +1,5 @@
 """Recognition that holds for performers the recogniser was not built around: the built-in
-library on :mod:`doodle.performers` styles, the two failure modes it used to have, the
+library on :mod:`doodle.synth.performers` styles, the two failure modes it used to have, the
 deliberate-motion stage (holds, blips, levelling) and its streaming form."""
 
 import numpy as np
@@ -7,11 +7,11 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from doodle.deliberate import Absorber, absorb
-from doodle.performers import GESTURES, MAIN_EXAMPLE, Style, perform, style_grid
-from doodle.pipeline import load_actions, recognize
-from doodle.segmenter import Segmenter, SegmenterParams, tokenize
-from doodle.tokens import CODES, Token
+from doodle.input.deliberate import Absorber, absorb
+from doodle.synth.performers import GESTURES, MAIN_EXAMPLE, Style, perform, style_grid
+from doodle.app.pipeline import load_actions, recognize
+from doodle.input.segmenter import Segmenter, SegmenterParams, tokenize
+from doodle.core.tokens import CODES, Token
 from grammar.matcher import match
 
 COMPILED = load_actions()

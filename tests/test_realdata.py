@@ -2,8 +2,8 @@
 
 import numpy as np
 
-from doodle.csvimport import read_csv
-from doodle.segmenter import tokenize_doodle
+from doodle.input.csvimport import read_csv
+from doodle.input.segmenter import tokenize_doodle
 
 
 def test_every_recording_loads_and_tokenises(vive_files):

@@ -15,14 +15,14 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from doodle.conventions import to_ours
-from doodle.errors import DoodleError
-from doodle.loader import load
-from doodle.model import Doodle
-from doodle.pipeline import load_actions, recognize
-from doodle.recorder import record
-from doodle.sources import OpenVRSource, ReplaySource, SyntheticSource, pose_from_matrix
-from doodle.synth import lost_tracking, perform
+from doodle.input.conventions import to_ours
+from doodle.core.errors import DoodleError
+from doodle.input.loader import load
+from doodle.core.model import Doodle
+from doodle.app.pipeline import load_actions, recognize
+from doodle.app.recorder import record
+from doodle.input.sources import OpenVRSource, ReplaySource, SyntheticSource, pose_from_matrix
+from doodle.synth.strokes import lost_tracking, perform
 
 REPO = Path(__file__).resolve().parents[1]
 JUMP = ["T_STILL", "T_Y", "T_Y_Z", "T_N_Y_Z", "T_N_Y", "T_STILL"]
@@ -246,7 +246,7 @@ def test_ctrl_c_ends_the_recording_cleanly(tmp_path, automaton):
 
 
 def test_the_demo_scene_is_recognised(tmp_path, automaton):
-    from doodle.cli_record import _open_source
+    from doodle.app.cli.record import _open_source
 
     source = _open_source(argparse.Namespace(source="synthetic", trigger=False))
     result, _, _ = run(source, tmp_path / "demo.doodle", automaton)
@@ -259,9 +259,9 @@ def test_the_demo_scene_is_recognised(tmp_path, automaton):
 CHILD = """
 import sys
 sys.path.insert(0, sys.argv[1])
-from doodle.recorder import record
-from doodle.sources import SyntheticSource
-from doodle.synth import stroke, synth_doodle
+from doodle.app.recorder import record
+from doodle.input.sources import SyntheticSource
+from doodle.synth.strokes import stroke, synth_doodle
 
 doodle = synth_doodle([stroke("T_STILL", 0.5), stroke("T_Z", 4.0, 0.4), stroke("T_STILL", 1.5)], seed=3)
 
@@ -323,7 +323,7 @@ def test_missing_steamvr_is_one_clear_line(capfd):
 
 def test_record_command_without_steamvr_leaves_no_file(tmp_path, capfd):
     _no_steamvr()
-    from doodle.cli_record import add_record_parser
+    from doodle.app.cli.record import add_record_parser
 
     parser = argparse.ArgumentParser(prog="doodle")
     add_record_parser(parser.add_subparsers(dest="command"))
@@ -336,10 +336,10 @@ def test_record_command_without_steamvr_leaves_no_file(tmp_path, capfd):
 
 
 def test_record_command_with_the_synthetic_source(tmp_path, capsys, monkeypatch, compiled):
-    import doodle.pipeline
-    from doodle.cli_record import add_record_parser
+    import doodle.app.pipeline
+    from doodle.app.cli.record import add_record_parser
 
-    monkeypatch.setattr(doodle.pipeline, "load_actions", lambda *a: compiled)
+    monkeypatch.setattr(doodle.app.pipeline, "load_actions", lambda *a: compiled)
     parser = argparse.ArgumentParser(prog="doodle")
     add_record_parser(parser.add_subparsers(dest="command"))
     path = tmp_path / "synthetic.doodle"

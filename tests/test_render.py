@@ -1,4 +1,4 @@
-"""Offscreen 3D rendering (doodle.render, doodle render): frames, sheet, GIF, MP4.
+"""Offscreen 3D rendering (doodle.app.render, doodle render): frames, sheet, GIF, MP4.
 
 Rendering tests skip, with the reason, where pyrender or an EGL context cannot be had; the
 rest (colours, geometry, errors) run everywhere.
@@ -13,8 +13,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from doodle import render
-from doodle.errors import DoodleError
+from doodle.app import render
+from doodle.core.errors import DoodleError
 
 DEMO = Path(__file__).resolve().parents[1] / "examples" / "demo.doodle"
 SMALL = (160, 120)
@@ -22,8 +22,8 @@ SMALL = (160, 120)
 
 @pytest.fixture(scope="module")
 def results():
-    from doodle.loader import load
-    from doodle.pipeline import compile_doodle
+    from doodle.input.loader import load
+    from doodle.app.pipeline import compile_doodle
 
     return compile_doodle(load(DEMO))
 
@@ -108,7 +108,7 @@ def test_missing_pyrender_is_one_clear_line(monkeypatch):
 
 
 def _cli(argv):
-    from doodle.cli_render import add_parser
+    from doodle.app.cli.render import add_parser
 
     parser = argparse.ArgumentParser(prog="doodle")
     add_parser(parser.add_subparsers())
@@ -213,7 +213,7 @@ def test_cli_renders_a_sheet_and_a_gif(results, gl, tmp_path, capsys):
         assert im.size == (4 * 64 + 5 * 4, 2 * 48 + 3 * 4)
     gif = tmp_path / "clip.gif"
     assert _cli([str(DEMO), "-o", str(gif), "--size", "48x36", "--fps", "5"]) == 0
-    from doodle.loader import load
+    from doodle.input.loader import load
 
     assert _gif_frames(gif) == int(np.floor(load(DEMO).t[-1] * 5)) + 1  # every frame compiled at 5 fps
     assert "GIF of" in capsys.readouterr().out

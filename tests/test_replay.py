@@ -5,11 +5,11 @@ from pathlib import Path
 
 import pytest
 
-from doodle.cli import main
-from doodle.loader import load
-from doodle.pipeline import load_actions, recognize
-from doodle.replay import replay
-from doodle.synth import lost_tracking
+from doodle.app.cli.main import main
+from doodle.input.loader import load
+from doodle.app.pipeline import load_actions, recognize
+from doodle.app.replay import replay
+from doodle.synth.strokes import lost_tracking
 
 DEMO = Path(__file__).resolve().parents[1] / "examples" / "demo.doodle"
 
@@ -25,7 +25,7 @@ def test_streaming_replay_equals_batch_recognition():
 
 
 def test_two_tracks_and_lost_tracking_stream():
-    from doodle.model import Doodle
+    from doodle.core.model import Doodle
 
     doodle = load(DEMO)
     tr = doodle.tracks[0]

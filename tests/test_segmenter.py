@@ -8,11 +8,11 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from scipy.spatial.transform import Rotation
 
-from doodle.errors import DoodleError
-from doodle.model import Track
-from doodle.segmenter import Segmenter, SegmenterParams, debounce, tokenize
-from doodle.synth import lost_tracking, resample, stroke, synth_track
-from doodle.tokens import ALPHABET, CODES, NAMES, T_BASE, Token, direction_index
+from doodle.core.errors import DoodleError
+from doodle.core.model import Track
+from doodle.input.segmenter import Segmenter, SegmenterParams, debounce, tokenize
+from doodle.synth.strokes import lost_tracking, resample, stroke, synth_track
+from doodle.core.tokens import ALPHABET, CODES, NAMES, T_BASE, Token, direction_index
 
 T_TOKENS = [n for n in ALPHABET if n.startswith("T_") and n != "T_STILL"]
 R_TOKENS = [n for n in ALPHABET if n.startswith("R_")]
@@ -175,7 +175,7 @@ def test_streaming_equals_batch_on_random_walks(n, seed, step):
 
 
 def test_streaming_equals_batch_on_real_recordings(vive_files):
-    from doodle.csvimport import read_csv
+    from doodle.input.csvimport import read_csv
 
     for path in vive_files[::25]:
         doodle = read_csv(path, convention="unity")

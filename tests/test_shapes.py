@@ -10,8 +10,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from doodle.cli import main
-from doodle.errors import DoodleError
+from doodle.app.cli.main import main
+from doodle.core.errors import DoodleError
 from grammar import shapes
 from grammar.learn import _dtw_cost
 
@@ -109,9 +109,9 @@ def test_held_out_performances_recognised_by_shape(tmp_path, capsys):
 
 
 def test_streaming_refiner_equals_batch(tmp_path):
-    from doodle.loader import load
-    from doodle.pipeline import load_actions, recognize, track_automata
-    from doodle.replay import replay
+    from doodle.input.loader import load
+    from doodle.app.pipeline import load_actions, recognize, track_automata
+    from doodle.app.replay import replay
 
     lib, files = _learn_all(tmp_path, ["hook_left", "hook_right", "golf_swing"])
     compiled = load_actions(lib, False)

@@ -6,9 +6,9 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.spatial.transform import Rotation
 
-from doodle import quat
-from doodle.frame import local_velocities, local_velocity
-from doodle.smoothing import StreamingSmoother, laplacian_kernel, savgol_kernel, smooth
+from doodle.core import quat
+from doodle.input.frame import local_velocities, local_velocity
+from doodle.input.smoothing import StreamingSmoother, laplacian_kernel, savgol_kernel, smooth
 
 
 def umbrella(x, k, lam=0.5):

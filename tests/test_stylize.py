@@ -8,7 +8,7 @@ import pytest
 from scipy.interpolate import CubicSpline
 from scipy.ndimage import gaussian_filter1d
 
-from doodle.cli import main
+from doodle.app.cli.main import main
 from library.manifest import builtin
 from retarget.analysis import foot_contacts, stages
 from retarget.bvh import read_bvh

@@ -1,4 +1,4 @@
-"""Tests of the synthetic doodle generator (doodle.synth)."""
+"""Tests of the synthetic doodle generator (doodle.synth.strokes)."""
 
 from __future__ import annotations
 
@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from doodle.model import Doodle, Track
-from doodle.synth import (
+from doodle.core.model import Doodle, Track
+from doodle.synth.strokes import (
     Stroke,
     lost_tracking,
     min_jerk,

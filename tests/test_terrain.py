@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from doodle.errors import DoodleError
+from doodle.core.errors import DoodleError
 from retarget.terrain import (
     SAMPLE_RELIEF_RATIO,
     Flat,

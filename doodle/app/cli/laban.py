@@ -1,0 +1,248 @@
+"""``doodle laban …``: Laban Effort models — train, evaluate, classify, and label a person's
+own recordings for training.
+
+Labelled examples are doodle files whose header says which Drive was performed
+(``# x-drive Punch``, optionally ``# x-performer ana``); ``doodle laban label`` writes it.
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+
+from doodle.core.errors import DoodleError
+
+DEFAULT_EVAL_DIR = "out/laban-eval"
+
+
+def add_parser(sub) -> None:
+    p = sub.add_parser("laban", help="Laban Effort models: train, eval, classify, label, record")
+    lsub = p.add_subparsers(dest="laban_command", required=True, metavar="train|eval|classify|label|record")
+
+    q = lsub.add_parser("train", help="train effort models from labelled doodles and/or generated curves")
+    q.add_argument("files", nargs="*", help="labelled doodle files (header x-drive) or folders of them")
+    q.add_argument("--synthetic", action="store_true", help="add the generated curves the default model uses")
+    q.add_argument("-o", "--output", required=True, metavar="MODEL.npz")
+    q.add_argument("--augment", type=int, default=16, help="sub-sampled copies per training curve (default 16)")
+    q.add_argument("--track", default="c0", help="track of each file holding the gesture (default c0)")
+    q.add_argument("--sets", default="euclidean,affine,moving",
+                   help="HMM feature sets of Table 4.3, comma-separated (default: all three)")
+    q.set_defaults(run=cmd_train)
+
+    q = lsub.add_parser("eval", help="accuracy per factor, State and Drive; confusion matrices as PNG")
+    q.add_argument("files", nargs="*", help="labelled doodle files or folders (default: generated held-out performers)")
+    q.add_argument("--model", metavar="MODEL.npz", help="model to evaluate (default: the shipped one)")
+    q.add_argument("-o", "--output", default=DEFAULT_EVAL_DIR, metavar="DIR", help=f"(default {DEFAULT_EVAL_DIR})")
+    q.add_argument("--track", default="c0")
+    q.add_argument("--people", type=int, default=3, help="generated held-out performers (default 3)")
+    q.add_argument("--json", action="store_true", help="print the report as JSON")
+    q.set_defaults(run=cmd_eval)
+
+    q = lsub.add_parser("classify", help="Time and Weight of each recognised action segment")
+    q.add_argument("files", nargs="+")
+    q.add_argument("--model", metavar="MODEL.npz")
+    q.add_argument("--whole", action="store_true", help="classify each track as one curve, not per action")
+    q.add_argument("--json", action="store_true")
+    q.set_defaults(run=cmd_classify)
+
+    q = lsub.add_parser("label", help="write the performed Drive into doodle files' headers")
+    q.add_argument("files", nargs="+")
+    q.add_argument("--drive", required=True, help="Punch, Dab, Press, Glide, Slash, Flick, Wring or Float")
+    q.add_argument("--performer", help="who performed it (groups held-out splits)")
+    q.set_defaults(run=cmd_label)
+
+    q = lsub.add_parser("record", help="record labelled examples with the controllers (needs SteamVR)")
+    q.add_argument("--drive", required=True)
+    q.add_argument("-o", "--output", required=True)
+    q.set_defaults(run=cmd_record)
+
+
+def _drive_name(value: str, where: str) -> str:
+    from laban.efforts import DRIVES
+
+    for name in DRIVES:
+        if name.lower() == str(value).strip().lower():
+            return name
+    raise DoodleError(f"{where}: unknown Drive {value!r}; Drives are {', '.join(DRIVES)}")
+
+
+def _files(items) -> list[Path]:
+    out = []
+    for item in items:
+        path = Path(item)
+        if path.is_dir():
+            out += sorted(p for p in path.rglob("*.doodle"))
+        else:
+            out.append(path)
+    return out
+
+
+def labelled(items, track: str = "c0") -> list:
+    """Labelled curves from doodle files whose header names the Drive (``x-drive``)."""
+    from doodle.input.loader import load
+    from laban.train import Labelled
+
+    curves = []
+    for path in _files(items):
+        doodle = load(path)
+        drive = doodle.meta.get("x-drive")
+        if drive is None:
+            raise DoodleError(f"{path}: no '# x-drive DRIVE' header line — label it with `doodle laban label`")
+        if track not in doodle.names:
+            raise DoodleError(f"{path}: no track {track!r} (tracks: {', '.join(doodle.names)})")
+        tr = doodle.tracks[doodle.names.index(track)]
+        performer = doodle.meta.get("x-performer") or path.parent.name
+        curves.append(Labelled(tr.t, tr.p, tr.q, _drive_name(drive, str(path)), performer))
+    return curves
+
+
+def cmd_train(args) -> int:
+    from doodle.app.cli.main import progress_bar
+    from laban.models import save
+    from laban.train import DEFAULT_DATA, generated, train
+
+    from laban.features import FEATURE_SETS
+
+    if args.augment < 1:
+        raise DoodleError(f"--augment must be 1 or more, not {args.augment}")
+    sets = tuple(s.strip() for s in args.sets.split(",") if s.strip())
+    if not sets or any(s not in FEATURE_SETS for s in sets):
+        raise DoodleError(f"--sets: choose among {', '.join(FEATURE_SETS)}, not {args.sets!r}")
+    curves = labelled(args.files, args.track) if args.files else []
+    held = []
+    if args.synthetic:
+        curves += generated("train")
+        held = generated("calibrate")
+    if not curves:
+        raise DoodleError("nothing to train on: give labelled doodle files or --synthetic")
+    info = {"files": [str(f) for f in args.files], "synthetic": DEFAULT_DATA if args.synthetic else None}
+    try:
+        model = train(curves, held or None, sets=sets, augment=args.augment, progress=progress_bar(), info=info)
+    except ValueError as e:
+        raise DoodleError(str(e)) from None
+    save(model, args.output)
+    print(f"{args.output}: {len(curves)} curves, temperature {model.temperature:.3g}, Naive Bayes features "
+          + ", ".join(f"{f} {len(b.features)}" for f, b in model.bayes.items()))
+    return 0
+
+
+def cmd_eval(args) -> int:
+    from laban.models import load as load_model
+    from laban.efforts import DRIVES, STATES
+    from laban.report import confusion_png
+    from laban.train import evaluate, generated
+
+    model = load_model(args.model)
+    if args.people < 1:
+        raise DoodleError(f"--people must be 1 or more, not {args.people}")
+    curves = labelled(args.files, args.track) if args.files else generated("test", people=args.people)
+    report = evaluate(model, curves)
+    report["data"] = [str(f) for f in args.files] or "generated held-out performers (laban.train.DEFAULT_DATA['test'])"
+    out = Path(args.output)
+    out.mkdir(parents=True, exist_ok=True)
+    pictures = []
+    for method, r in report["methods"].items():
+        pictures.append(str(confusion_png(r["drive_confusion"], list(DRIVES), out / f"{method}_drives.png",
+                                          f"{method}: Drives")))
+        pictures.append(str(confusion_png(r["state_confusion"], list(STATES), out / f"{method}_states.png",
+                                          f"{method}: States (Time + Weight)")))
+    report["pictures"] = pictures
+    from doodle.core.files import atomic_write
+
+    atomic_write(out / "report.json", [json.dumps(report, indent=2) + "\n"])
+    if args.json:
+        print(json.dumps(report))
+        return 0
+    print(f"{len(curves)} curves; accuracy per method (chance: factor 0.5, State 0.25, Drive 0.125)")
+    print(f"  {'method':<12} {'space':>6} {'time':>6} {'weight':>6} {'state':>6} {'drive':>6}")
+    for method, r in report["methods"].items():
+        print(f"  {method:<12} " + " ".join(f"{r[k]:6.3f}" for k in ("space", "time", "weight", "state", "drive")))
+    print(f"{out / 'report.json'}; confusion matrices: {', '.join(pictures)}")
+    return 0
+
+
+def cmd_classify(args) -> int:
+    from laban.models import load as load_model
+    from doodle.input.loader import load
+    from doodle.app.pipeline import effort_quality, load_actions, recognize
+    from doodle.input.segmenter import SegmenterParams
+
+    model = load_model(args.model)
+    compiled = None if args.whole else load_actions(None, True)
+    failed = 0
+    for path in args.files:
+        try:
+            doodle = load(path)
+        except DoodleError as e:
+            print(f"doodle: error: {e}", file=sys.stderr)
+            failed += 1
+            continue
+        rows = []
+        for tr in doodle.tracks:
+            if args.whole:
+                spans = [("(whole)", 0, len(tr.t) - 1)]
+            else:
+                _, segs = recognize(doodle, compiled, SegmenterParams())[tr.name]
+                spans = [(s.action, s.start, s.end) for s in segs if s.action != "unknown"]
+            for action, a, b in spans:
+                e = effort_quality(model, tr, a, b)
+                rows.append({"track": tr.name, "action": action, "start": round(float(tr.t[a]), 3),
+                             "end": round(float(tr.t[min(b, len(tr.t) - 1)]), 3), "time": e.time, "weight": e.weight,
+                             "p_sudden": round(e.p_sudden, 3), "p_strong": round(e.p_strong, 3),
+                             "drive": e.drive, "state": e.state})
+        if args.json:
+            print(json.dumps({"file": str(path), "segments": rows}))
+            continue
+        print(path)
+        for r in rows:
+            print(f"  {r['track']} {r['start']:7.2f} {r['end']:7.2f}  {r['action']:<15} time {r['time']:+.2f} "
+                  f"(P sudden {r['p_sudden']:.2f})  weight {r['weight']:+.2f} (P strong {r['p_strong']:.2f})  "
+                  f"{r['drive'] or '-'}")
+    return 1 if failed else 0
+
+
+def cmd_label(args) -> int:
+    from doodle.input.fileformat import write_doodle
+    from doodle.input.loader import load
+
+    drive = _drive_name(args.drive, "--drive")
+    for path in args.files:
+        if not str(path).endswith(".doodle"):
+            raise DoodleError(f"{path}: only doodle files carry labels; convert CSV first with `doodle import`")
+        doodle = load(path)
+        meta = dict(doodle.meta, **{"x-drive": drive})
+        if args.performer:
+            meta["x-performer"] = args.performer
+        from dataclasses import replace
+
+        write_doodle(path, replace(doodle, meta=meta))
+        print(f"{path}: x-drive {drive}" + (f", x-performer {args.performer}" if args.performer else ""))
+    return 0
+
+
+def cmd_record(args) -> int:
+    """Record labelled takes with the controllers: each take starts and stops with the
+    trigger, then gets the Drive in its header."""
+    from dataclasses import replace
+
+    from doodle.input.fileformat import write_doodle
+    from doodle.input.loader import load
+    from doodle.app.recorder import record
+    from doodle.input.sources import OpenVRSource
+
+    drive = _drive_name(args.drive, "--drive")
+    try:
+        source = OpenVRSource()
+    except DoodleError as e:
+        raise DoodleError(f"{e}; or record elsewhere and label the file with `doodle laban label FILE "
+                          f"--drive {drive}`") from None
+    try:
+        print(f"press the trigger, perform a {drive}, press the trigger again", flush=True)
+        result = record(source, args.output, wait_for_trigger=True)
+    finally:
+        source.close()
+    doodle = load(result.path)
+    write_doodle(result.path, replace(doodle, meta=dict(doodle.meta, **{"x-drive": drive})))
+    print(f"{result.path}: {result.duration:.2f} s, x-drive {drive}")
+    return 0

@@ -1,0 +1,466 @@
+"""The compile pipeline: the one place that ties doodle → grammar → (laban → retarget).
+
+Samples → tokens (Segmenter) → action segments (Matcher) → trajectory and clip sequence →
+one animation per track (:func:`compile_doodle`), with quality metrics (:func:`quality`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from doodle.core import quat
+from doodle.core.errors import DoodleError
+from doodle.core.model import Doodle
+from doodle.input.segmenter import SegmenterParams, tokenize_doodle
+from doodle.core.tokens import Token
+from grammar.library import Compiled, compile_library
+from grammar.matcher import Segment, match
+from grammar.shapes import refine
+from library.manifest import builtin, combine, load_library
+
+
+def load_actions(library_dir=None, use_builtin: bool = True) -> Compiled:
+    """The built-in library, extended or overridden by the one in ``library_dir``."""
+    user = load_library(library_dir) if library_dir else None
+    if not use_builtin and user is None:
+        raise DoodleError("--no-builtin needs --library DIR")
+    return compile_library(combine(builtin() if use_builtin else None, user))
+
+
+def recognize(doodle: Doodle, compiled: Compiled, params: SegmenterParams = SegmenterParams(),
+              threshold: float = 2.0, direction_costs: bool = False,
+              interactions: bool = True) -> dict[str, tuple[list[Token], list[Segment]]]:
+    """Per track: its tokens and the action segments recognised in them — with the
+    library's interactions between tracks recognised by the Contexter (§6.2.1) where the
+    doodle has several tracks (unless ``interactions`` is False)."""
+    tokens = tokenize_doodle(doodle, params)
+    automata = track_automata(compiled, list(tokens), threshold, direction_costs)
+    result = {}
+    for name, toks in tokens.items():
+        segments = match(toks, automata[name], name)
+        if compiled.shapes is not None:  # learned actions re-decided by their examples' shapes
+            track = doodle.track(name)
+            segments = refine(segments, toks, track.p, track.valid, compiled.shapes, name)
+        result[name] = (toks, segments)
+    if interactions and len(result) > 1 and compiled.library.interactions:
+        from grammar.contexter import with_interactions
+
+        resolved = with_interactions(doodle, compiled, result, threshold)
+        result = {name: (toks, resolved[name]) for name, (toks, _) in result.items()}
+    from grammar.contexter import apply_behaviour, behaviours
+
+    rules = behaviours(compiled)
+    if rules:  # behaviour states (§6.3.3): actions whose pre-conditions fail are refused
+        walked = apply_behaviour(doodle, {name: segs for name, (_, segs) in result.items()}, rules,
+                                 frozenset(compiled.library.states), frozenset(compiled.library.names))
+        result = {name: (toks, walked[name]) for name, (toks, _) in result.items()}
+    return result
+
+
+def track_automata(compiled: Compiled, tracks: list[str], threshold: float = 2.0,
+                   direction_costs: bool = False) -> dict:
+    """The Matcher's tables per track: one shared unless some action is bound to a track."""
+    if not compiled.bound:
+        automaton = compiled.automaton(threshold, direction_costs)
+        return {name: automaton for name in tracks}
+    return {name: compiled.automaton(threshold, direction_costs, name) for name in tracks}
+
+
+# --- compile: actions → animation (first version: flat ground, built-in clips) -------------
+
+CHARACTER_HEIGHT = 1.7  # metres
+PROP_SIZE = 0.2  # metres: a 20 cm figurine plays a 1.7 m character
+
+
+@dataclass(frozen=True, eq=False)
+class Animation:
+    """One track's animation and what went into it."""
+
+    track: str
+    motion: object  # retarget.skeleton.Motion
+    segments: list
+    tokens: list
+    path: np.ndarray  # (F, 3) transferred root path at the output frames
+    transitions: list[float]
+    clips: dict  # action -> clip path
+    roles: dict  # role -> joint index on the output skeleton
+    terrain: object = None  # retarget.terrain ground (None: flat y = 0)
+    frame_ranges: list = None  # per segment, its first and last output frame
+    projected: np.ndarray = None  # the doodle scaled and projected, before the transfer (n, 3)
+    styles: list = None  # per segment, the (L_t, L_w) applied
+    efforts: list = None  # per segment, the recognised Effort (laban.classify.Quality) or None
+    sample_times: np.ndarray = None  # s: the doodle's sample times the segments index (walks inserted: longer)
+
+
+def compile_doodle(doodle: Doodle, library_dir=None, use_builtin: bool = True, params: SegmenterParams = SegmenterParams(),
+                   fps: float = 30.0, scale: float | None = None, threshold: float = 2.0,
+                   pin: bool = True, terrain=None, jump_arc: str = "clip", retime: str = "uniform",
+                   qualities: dict | None = None, style: str = "modifiers", effort_model=None,
+                   progress=None) -> list[Animation]:
+    """Every track of a doodle turned into an animation on one timeline.
+
+    Feet are pinned in their contacts unless ``pin`` is False. ``qualities`` maps
+    ``(track, segment index)`` — or ``(track, None)`` / ``(None, None)`` for every segment
+    of a track / of the doodle — to Laban ``(L_t, L_w)``, applied to one-shot clips as the
+    thesis's modifiers or, with ``style="preferred"``, as its study's preferred combination.
+    Segments without a quality given get the one ``effort_model`` (a
+    :class:`laban.models.EffortModel`) recognises in the hand's motion, if one is given.
+    ``progress(done, total)`` is called as segments are done (for a progress bar).
+    """
+    from library.manifest import builtin as builtin_library
+    from library.manifest import combine
+    from retarget.clips import load_clips
+    from retarget.feet import clamp_to_ground, pin_feet
+    from retarget.sequence import Placed, sequence
+    from retarget.skeleton import forward_kinematics
+    from retarget.trajectory import Span, world_path
+
+    user = load_library(library_dir) if library_dir else None
+    if not use_builtin and user is None:
+        raise DoodleError("--no-builtin needs --library DIR")
+    library = combine(builtin_library() if use_builtin else None, user)
+    actions = compile_library(library)
+    clips = load_clips(library)
+    scale = CHARACTER_HEIGHT / PROP_SIZE if scale is None else scale
+    results = []
+    recognised = recognize(doodle, actions, params, threshold)
+    placements = {i.name: i.placement if i.placement is not None else _pair_placement(i)
+                  for i in library.interactions if i.placement is not None or i.pair}
+    if placements:  # §6.2.2: walks to the interaction's configuration and back, time inserted
+        from doodle.app.placement import place
+
+        placed_doodle = place(doodle, recognised, scale, placements)
+        if placed_doodle is not doodle:
+            doodle = placed_doodle
+            recognised = recognize(doodle, actions, params, threshold)
+    met = meet(doodle, recognised, scale, skip=set(placements))
+    if met is not doodle:  # characters brought within reach: read the scene again
+        doodle = met
+        recognised = recognize(doodle, actions, params, threshold)
+    duration = float(doodle.t[-1])
+    times = np.arange(int(np.floor(duration * fps)) + 1) / fps
+    skeleton, rest = _compile_skeleton(library, user, clips)
+    total, done = sum(len(segs) for _, segs in recognised.values()), 0
+    origin = doodle.tracks[0].p[0]  # one origin for the scene: characters keep their relative places
+    for track in doodle.tracks:
+        tokens, segments = recognised[track.name]
+        spans, placed, used = [], [], {}
+        styles, efforts = [], []
+        for index, seg in enumerate(segments):
+            if progress:
+                done += 1
+                progress(done, total)
+            on_skeleton = [c for c in clips.get(seg.action, []) if c.motion.skeleton.names == skeleton.names]
+            clip = on_skeleton[0] if on_skeleton else rest
+            name = seg.action if seg.action in library.names else "Idle"
+            action = library.action(name) if name in library.names else library.action(rest.action)
+            given = _quality_of(qualities, track.name, index)
+            effort = None
+            if given is None and effort_model is not None and seg.action != "unknown":
+                effort = effort_quality(effort_model, track, seg.start, seg.end)
+                given = (effort.time, effort.weight)
+            efforts.append(effort)
+            lt, lw = given or (0.0, 0.0)
+            if action.cyclic:
+                lt = 0.0  # a cycle's pace is the hand's travel: Time has nothing to retime
+            if (lt or lw) and on_skeleton:
+                clip = _stylized(clip, lt, lw, style, action.cyclic)
+            styles.append((lt, lw) if (lt or lw) and on_skeleton else (0.0, 0.0))
+            n = clip.motion.frames
+            b = clip.stages.bounds()
+            execution = (b["execution"][0] / max(n - 1, 1), b["execution"][1] / max(n - 1, 1))
+            hips = forward_kinematics(clip.motion)[0][:, clip.roles["pelvis"]][:, [0, 2]]
+            travel = hips[-1] - hips[0]
+            travels = not action.in_place and float(np.linalg.norm(travel)) > 0.2  # a walk, a jump
+            span = Span(seg.action, float(track.t[seg.start]), float(track.t[min(seg.end, len(track.t) - 1)]),
+                        seg.start, seg.end, action.in_place, action.jumping, action.cyclic, execution,
+                        float(np.arctan2(travel[0], travel[1])) if travels else 0.0)
+            spans.append(span)
+            placed.append((span, clip, travels))
+            used[seg.action] = clip.path if on_skeleton else None
+        front = quat.rotate(track.q[:1], np.array([[0.0, 0.0, 1.0]]))[0]  # the figurine's front at the start
+        path, heading = world_path(track.t, track.p, spans, scale, terrain, jump_arc, origin,
+                                   float(np.arctan2(front[0], front[2])))
+        frame_path = np.column_stack([np.interp(times, track.t, path[:, k]) for k in range(3)])
+        frame_heading = np.interp(times, track.t, heading)
+        pieces = []
+        step = np.linalg.norm(np.diff(frame_path[:, [0, 2]], axis=0), axis=1)
+        for span, clip, travels in placed:
+            cycles, progress = 0.0, None
+            if span.cyclic:
+                cycles = max((span.t1 - span.t0) / clip.motion.duration, 1.0)
+                if not span.in_place and clip.cycle_length:
+                    inside = (times[1:] > span.t0) & (times[1:] <= span.t1)
+                    progress = np.concatenate([[0.0], np.cumsum(np.where(inside, step, 0.0))])
+            pelvis = clip.roles["pelvis"]
+            by_hand = retime == "gesture" or (style == "preferred" and styles[len(pieces)] != (0.0, 0.0))
+            gesture = gesture_timing(track, span) if by_hand and not span.cyclic else None
+            pieces.append(Placed(span, clip.motion, pelvis, cycles, times, progress if travels else None, travels,
+                                 gesture=gesture))
+        pieces = _transition_points(pieces, [clip for _, clip, _ in placed])
+        motion, transitions = sequence(pieces, times, frame_path[:, [0, 2]], frame_heading, skeleton, fps,
+                                       ground_y=frame_path[:, 1])
+        if pin:
+            motion = pin_feet(motion, [rest.roles["left_foot"], rest.roles["right_foot"]], terrain=terrain)
+        motion = clamp_to_ground(motion, terrain)
+        ranges = [(int(np.searchsorted(times, sp.t0)), int(min(np.searchsorted(times, sp.t1), len(times) - 1)))
+                  for sp in spans]
+        projected = (track.p - origin) * scale
+        projected[:, 1] = 0.0 if terrain is None else terrain.height(projected[:, [0, 2]])
+        results.append(Animation(track.name, motion, segments, tokens, frame_path, transitions, used, rest.roles,
+                                terrain, ranges, projected, styles, efforts, track.t))
+    _contacts(results, recognised, {i.name: i for i in library.interactions})
+    return results
+
+
+def _pair_placement(interaction) -> tuple[float, float, float]:
+    """The placement an interaction's two-character clip shows at its first frame."""
+    from retarget.bvh import read_bvh
+    from retarget.pair import placement
+
+    motions = []
+    for path in interaction.pair:
+        try:
+            motions.append(read_bvh(path))
+        except OSError as e:
+            raise DoodleError(f"{path}: cannot read the two-character clip of interaction "
+                              f"{interaction.name!r}: {e.strerror or e}") from None
+    return placement(*motions)
+
+
+MEET_DISTANCE = 0.6  # m between two interacting characters' roots: within a hand's reach (§6.2.2)
+HEAD_RADIUS = 0.09  # m: the hand meets the head's surface, not its centre
+MEET_S = 0.8  # s: the receiver steps in over this long before the interaction
+
+
+def _interaction_pairs(recognised: dict) -> list[tuple[str, object, str, object]]:
+    """(track of role 0, its segment, track of role 1, its segment) of each recognised
+    two-character interaction."""
+    firsts = [(tr, s) for tr, (_, segs) in recognised.items() for s in segs if getattr(s, "role", None) == 0]
+    seconds = [(tr, s) for tr, (_, segs) in recognised.items() for s in segs if getattr(s, "role", None) == 1]
+    pairs = []
+    for ta, a in firsts:
+        for tb, b in seconds:
+            if tb != ta and b.interaction == a.interaction and b.start < a.end and a.start < b.end:
+                pairs.append((ta, a, tb, b))
+                break
+    return pairs
+
+
+def meet(doodle: Doodle, recognised: dict, scale: float, skip=frozenset()) -> Doodle:
+    """Interaction placement (§6.2.2, simplified): for each recognised two-character
+    interaction whose characters stand farther apart than a hand's reach, the second
+    character (role 1) steps towards the first over the :data:`MEET_S` before its role
+    begins (a minimum-jerk move in the doodle, read back as an implicit walk where there is
+    time for one) and stays at :data:`MEET_DISTANCE` from it."""
+    from doodle.core.profiles import min_jerk
+
+    tracks = {tr.name: tr for tr in doodle.tracks}
+    changed = False
+    for ta, a, tb, b in _interaction_pairs(recognised):
+        if a.interaction in skip:  # placed by its own configuration (doodle.app.placement)
+            continue
+        A, B = tracks[ta], tracks[tb]
+        i = min(b.start, len(B.t) - 1)
+        j = int(np.argmin(np.abs(A.t - B.t[i])))
+        gap = (A.p[j] - B.p[i]) * np.array([1.0, 0.0, 1.0])
+        far, want = float(np.linalg.norm(gap)), MEET_DISTANCE / scale
+        if far <= want:
+            continue
+        shift = gap / far * (far - want)
+        u = np.clip((B.t - (B.t[i] - MEET_S)) / MEET_S, 0.0, 1.0) if i > 0 else np.ones(len(B.t))
+        tracks[tb] = replace(B, p=B.p + min_jerk(u)[:, None] * shift)
+        changed = True
+    return replace(doodle, tracks=tuple(tracks[tr.name] for tr in doodle.tracks)) if changed else doodle
+
+
+def _contacts(results: list, recognised: dict, interactions: dict) -> None:
+    """For each recognised interaction with a ``contact`` (e.g. the slapper's right hand and
+    the other's head), role 0's hand reaches role 1's joint 60 % into its segment (about
+    the end of its execution; retarget.contact), where it can — a head is met on its
+    surface."""
+    from retarget.analysis import guess_roles
+    from retarget.contact import reach
+    from retarget.skeleton import forward_kinematics
+
+    by_track = {r.track: k for k, r in enumerate(results)}
+    for ta, a, tb, b in _interaction_pairs(recognised):
+        contact = interactions.get(a.interaction).contact if a.interaction in interactions else ()
+        if not contact or not contact[0].endswith("_hand"):
+            continue
+        ra, rb = results[by_track[ta]], results[by_track[tb]]
+        index = next((k for k, s in enumerate(ra.segments) if s is a or (s.first, s.action) == (a.first, a.action)),
+                     None)
+        head = guess_roles(rb.motion.skeleton).get(contact[1])
+        if index is None or head is None or not ra.frame_ranges:
+            continue
+        f0, f1 = ra.frame_ranges[index]
+        frame = f0 + int(round(0.6 * (f1 - f0)))
+        centre = forward_kinematics(rb.motion)[0][frame, head]
+        hand = forward_kinematics(ra.motion)[0][frame, guess_roles(ra.motion.skeleton)[contact[0]]]
+        towards = (hand - centre) / max(float(np.linalg.norm(hand - centre)), 1e-9)
+        surface = HEAD_RADIUS if contact[1] == "head" else 0.0
+        side = contact[0].split("_")[0]
+        results[by_track[ta]] = replace(ra, motion=reach(ra.motion, centre + surface * towards, frame, side))
+
+
+def gesture_timing(track, span) -> tuple[np.ndarray, np.ndarray] | None:
+    """Gesture-based retiming (§5.3.3): the share of the segment's arc length the hand has
+    covered at each of its sample times, ``β(t)/L`` — of the path, or of the rotation for a
+    gesture that barely translates. None for a gesture that does not move."""
+    seg = slice(span.i0, span.i1)
+    t = track.t[seg]
+    if len(t) < 2:
+        return None
+    steps = np.linalg.norm(np.diff(track.p[seg], axis=0), axis=1)
+    if steps.sum() < 1e-3:
+        q = track.q[seg]
+        steps = 2 * np.arccos(np.clip(np.abs(np.sum(q[1:] * q[:-1], axis=1)), 0.0, 1.0))
+    total = steps.sum()
+    if not total > 0:
+        return None
+    return t, np.concatenate([[0.0], np.cumsum(steps)]) / total
+
+
+def _quality_of(qualities: dict | None, track: str, index: int) -> tuple[float, float] | None:
+    """The user's (L_t, L_w) for a segment, or None where they gave none."""
+    for key in ((track, index), (track, None), (None, None)):
+        if qualities and key in qualities:
+            return qualities[key]
+    return None
+
+
+def effort_quality(model, track, start: int, end: int):
+    """The Effort recognised in samples [start, end] of a track (laban, §4.4)."""
+    from laban.classify import quality as laban_quality
+
+    seg = slice(start, min(end + 1, len(track.t)))
+    return laban_quality(model, track.t[seg], track.p[seg], track.q[seg])
+
+
+def _stylized(clip, lt: float, lw: float, style: str = "modifiers", cycle: bool = False):
+    """The clip with Time then Weight applied, its stages moved with it (``style``
+    "preferred": motion scale and reshaping only, the timing left to the gesture; a
+    ``cycle`` gets Weight's swing and posture only)."""
+    from retarget.stylize import cyclic, preferred, stylize_staged
+
+    if cycle:
+        return replace(clip, motion=cyclic(clip.motion, lw))
+    if style == "preferred":
+        return replace(clip, motion=preferred(clip.motion, clip.stages, lt, lw))
+    motion, stages = stylize_staged(clip.motion, clip.stages, lt, lw)
+    return replace(clip, motion=motion, stages=stages)
+
+
+def read_edits(path) -> dict:
+    """Per-segment qualities from a JSON edit file::
+
+        {"time": 0.5, "weight": 0.0,                      # every segment (optional)
+         "segments": [{"track": "c0", "index": 5, "time": 1.0, "weight": -0.5}]}
+    """
+    import json
+
+    try:
+        data = json.loads(open(path, encoding="utf-8").read())
+    except OSError as e:
+        raise DoodleError(f"{path}: cannot read: {e.strerror}") from None
+    except json.JSONDecodeError as e:
+        raise DoodleError(f"{path}:{e.lineno}: not valid JSON: {e.msg}") from None
+    if not isinstance(data, dict):
+        raise DoodleError(f"{path}: expected a JSON object with 'segments'")
+    out = {}
+
+    def quality(entry, where):
+        values = []
+        for key in ("time", "weight"):
+            v = entry.get(key, 0.0)
+            if not isinstance(v, (int, float)) or isinstance(v, bool) or not -1.0 <= v <= 1.0:
+                raise DoodleError(f"{path}: {where}: '{key}' must be a number in [-1, 1], not {v!r}")
+            values.append(float(v))
+        return tuple(values)
+
+    if "time" in data or "weight" in data:
+        out[(None, None)] = quality(data, "top level")
+    for i, entry in enumerate(data.get("segments", []), 1):
+        if not isinstance(entry, dict) or not isinstance(entry.get("track"), str):
+            raise DoodleError(f"{path}: segments #{i}: needs a 'track' name")
+        index = entry.get("index")
+        if index is not None and (not isinstance(index, int) or isinstance(index, bool) or index < 0):
+            raise DoodleError(f"{path}: segments #{i}: 'index' must be a segment number (0, 1, …)")
+        out[(entry["track"], index)] = quality(entry, f"segments #{i}")
+    return out
+
+
+def _transition_points(pieces: list, clips: list) -> list:
+    """Clip ranges between transition points (§5.3.1) for neighbouring one-shot clips."""
+    from retarget.transitions import transition_point
+
+    pieces = list(pieces)
+    for k in range(len(pieces) - 1):
+        a, b = pieces[k], pieces[k + 1]
+        one_shot_a, one_shot_b = a.cycles == 0 and a.progress is None, b.cycles == 0 and b.progress is None
+        if not (one_shot_a or one_shot_b) or a.motion.frames < 4 or b.motion.frames < 4:
+            continue
+        i, j = transition_point(a.motion, b.motion, clips[k].stages, clips[k + 1].stages, a.pelvis, b.pelvis)
+        start = a.clip_in / a.motion.frame_time
+        if one_shot_a and i - start >= 2:
+            pieces[k] = replace(a, clip_out=i * a.motion.frame_time)
+        if one_shot_b and b.motion.frames - 1 - j >= 2:
+            pieces[k + 1] = replace(b, clip_in=j * b.motion.frame_time)
+    return pieces
+
+
+def _compile_skeleton(library, user, clips):
+    """The skeleton of the output (the user library's clips' when it has any, else the
+    built-in humanoid) and a rest-pose clip on it, played for actions that have no clip
+    on that skeleton (held first frame of its Idle, or of its first clip)."""
+    from retarget.analysis import Stages
+
+    mine = [c for a in (user.actions if user else ()) for c in clips.get(a.name, [])]
+    pool = mine or [c for found in clips.values() for c in found]
+    if not pool:
+        raise DoodleError(f"{library.source}: no action has a clip to animate")
+    skeleton = pool[0].motion.skeleton
+    same = [c for c in pool if c.motion.skeleton.names == skeleton.names]
+    base = next((c for c in same if c.action == "Idle"), same[0])
+    if base.action == "Idle":
+        return skeleton, base
+    still = base.motion.slice(0, 1)
+    still = replace(still, translations=np.repeat(still.translations, 2, axis=0),
+                     rotations=np.repeat(still.rotations, 2, axis=0))
+    rest = replace(base, motion=still, stages=Stages(0, 0, 1, 1, 2), cycle_length=None,
+                    contacts=np.ones((2, 2), dtype=bool))
+    return skeleton, rest
+
+
+def quality(result: Animation) -> dict:
+    """Report metrics: foot skating, ground penetration, root deviation from the path,
+    transition smoothness."""
+    roles = result.roles
+    from retarget.feet import planted
+    from retarget.skeleton import end_site_positions, forward_kinematics
+
+    motion = result.motion
+    world = forward_kinematics(motion)
+    positions = world[0]
+    feet = [roles["left_foot"], roles["right_foot"]]
+    contacts = planted(motion, feet, positions, result.terrain)
+    vel = np.linalg.norm(np.gradient(positions[:, feet][:, :, [0, 2]], motion.frame_time, axis=0), axis=2)
+    skating = float(vel[contacts].mean()) if contacts.any() else 0.0
+    ends = end_site_positions(motion, world)
+    points = np.concatenate([positions] + [e[:, None] for e in ends.values()], axis=1)
+    ground = 0.0 if result.terrain is None else result.terrain.height(points[:, :, [0, 2]])
+    lowest = float(np.min(points[:, :, 1] - ground))
+    pelvis = positions[:, roles["pelvis"]]
+    deviation = float(np.mean(np.linalg.norm(pelvis[:, [0, 2]] - result.path[:, [0, 2]], axis=1)))
+    acc = np.linalg.norm(np.diff(positions, n=2, axis=0), axis=2).max(axis=1) / motion.frame_time ** 2
+    times = np.arange(motion.frames) * motion.frame_time
+    near = np.zeros(len(acc), dtype=bool)
+    for b in result.transitions:
+        near |= np.abs(times[1:-1] - b) <= 0.15
+    smooth = float(acc[near].max() / max(acc[~near].max(), 1e-9)) if near.any() and (~near).any() else None
+    return {"foot_skating_m_per_s": round(skating, 4), "ground_penetration_m": round(max(0.0, -lowest), 4),
+            "root_deviation_m": round(deviation, 4),
+            "transition_smoothness": None if smooth is None else round(smooth, 3)}
