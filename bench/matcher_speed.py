@@ -15,7 +15,7 @@ import time
 
 import numpy as np
 
-from doodle.app.pipeline import load_actions
+from grammar.recognizer import load_actions
 from doodle.core.tokens import CODES, Token
 from grammar.automata import sample
 from grammar.library import compile_library, overlaps

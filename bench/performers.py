@@ -30,7 +30,7 @@ from pathlib import Path
 import numpy as np
 
 from doodle.synth.performers import GESTURES, MAIN_EXAMPLE, perform, style_grid
-from doodle.app.pipeline import load_actions, recognize
+from grammar.recognizer import load_actions, recognize
 from doodle.input.segmenter import SegmenterParams
 
 RAW = SegmenterParams(pause_s=0.0, significance=0.0, min_extent_s=0.0, level_cap=0.0)

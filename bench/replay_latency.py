@@ -8,7 +8,7 @@ import numpy as np
 
 from doodle.input.loader import load
 from doodle.core.model import Doodle, Track
-from doodle.app.pipeline import load_actions
+from grammar.recognizer import load_actions
 from doodle.app.replay import replay
 
 DEMO = Path(__file__).resolve().parents[1] / "examples" / "demo.doodle"
@@ -27,8 +27,8 @@ def _long_two_tracks(doodle, repeats=7) -> Doodle:
 
 def main() -> None:
     doodle = _long_two_tracks(load(DEMO))
-    auto = load_actions().automaton()
-    found, costs = replay(doodle, auto)
+    replayed = replay(doodle, load_actions())
+    found, costs = replayed.found, replayed.costs
     seg_only = _segmenter_only(doodle)
     print(f"Replay: {doodle.t[-1]:.0f} s, 2 tracks at {doodle.rate:g} Hz, {len(found)} actions recognised")
     print(f"  per frame, Segmenter + Matcher: p50 {np.percentile(costs, 50) * 1e3:.3f} ms, "

@@ -2,8 +2,8 @@
 
 An interaction ``{A_n, C_m}`` (a ``[[interactions]]`` entry of a library) is ``n`` actions,
 one per character (role 0, 1, …), and ``m`` constraints between roles
-(:mod:`grammar.constraints`, §6.3). This first version works on the per-track Matchers'
-segments (batch; :func:`recognize_interactions` runs the whole pipeline):
+(:mod:`grammar.constraints`, §6.3). It works on the per-track Matchers'
+segments (batch; :func:`grammar.recognizer.recognize_interactions` runs the whole pipeline):
 
 * **Candidates.** For every interaction and every assignment of its roles to distinct tracks
   (``k!·C(n, k)`` configurations, :func:`itertools.permutations`), every tuple of segments —
@@ -25,7 +25,7 @@ segments (batch; :func:`recognize_interactions` runs the whole pipeline):
   interactions win over the independent actions they cover; other segments stay as they are.
 
 Roles that are ``interaction_only`` actions are matched on each track's tokens by a Matcher
-of their own (:func:`recognize_interactions`) and, when the interaction holds, replace the
+of their own (:func:`with_interactions`) and, when the interaction holds, replace the
 independent segments they cover.
 
 Streaming: :class:`LiveContexter` pools each track's final segments as they come and reports
@@ -166,26 +166,16 @@ def relabel(segments: dict[str, list[Segment]], found: list[Found]) -> dict[str,
     return out
 
 
-def recognize_interactions(doodle, compiled, params=None, threshold: float = 2.0, radius: float | dict = RADIUS,
-                           mode: str = "any") -> dict[str, list[Segment]]:
-    """Per track, the segments of :func:`doodle.app.pipeline.recognize` with the library's
-    interactions recognised across tracks (:class:`InteractionSegment` where they are).
+def with_interactions(doodle, compiled, recognised: dict, threshold: float = 2.0, radius: float | dict = RADIUS,
+                      mode: str = "any") -> dict[str, list[Segment]]:
+    """Per track, the segments of already recognised ``(tokens, segments)`` with the
+    library's interactions recognised across tracks (:class:`InteractionSegment` where they are).
 
     Roles that are ordinary actions are looked for among each track's segments; roles that
     are ``interaction_only`` actions (the thesis's Slap ``(T_N_Z)+ T_Z``, Slapped
     ``T_STILL+``…) are matched on the track's tokens by a Matcher of their own, and where
     such an interaction is recognised its segment replaces the independent segments it
     covers (interactions take priority, §6.2.1)."""
-    from doodle.app.pipeline import recognize
-    from doodle.input.segmenter import SegmenterParams
-
-    recognised = recognize(doodle, compiled, params or SegmenterParams(), threshold, interactions=False)
-    return with_interactions(doodle, compiled, recognised, threshold, radius, mode)
-
-
-def with_interactions(doodle, compiled, recognised: dict, threshold: float = 2.0, radius: float | dict = RADIUS,
-                      mode: str = "any") -> dict[str, list[Segment]]:
-    """:func:`recognize_interactions` on per-track ``(tokens, segments)`` already recognised."""
     from grammar.matcher import match
 
     segments = {tr: segs for tr, (_, segs) in recognised.items()}

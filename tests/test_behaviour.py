@@ -5,7 +5,7 @@ role is refused is dropped on both tracks — and the manifest's checks."""
 import pytest
 
 from doodle.core.errors import DoodleError
-from doodle.app.pipeline import load_actions, recognize
+from grammar.recognizer import load_actions, recognize
 from doodle.synth.strokes import stroke, synth_doodle
 from grammar.constraints import Behaviour
 from grammar.contexter import InteractionSegment, Refused
@@ -112,3 +112,73 @@ def test_behaviour_fields_round_trip_and_checks(tmp_path):
     stuck = MANIFEST.replace('sets = ["standing"]\nclears = ["fallen"]', '')
     with pytest.raises(DoodleError, match="action 'Fall' sets state 'fallen' but no action clears it"):
         load_actions(_library(tmp_path, stuck), True)
+
+
+def _heard(found):
+    return [(r.track, r.action, round(r.start, 4)) for r in found if not r.interaction]
+
+
+def _batch(doodle, result):
+    return [(name, s.action, round(float(doodle.track(name).t[s.start]), 4)) for name, (_, segs) in result.items()
+            for s in segs if s.action != "unknown"]
+
+
+def _recorded(tmp_path, doodle, compiled):
+    from doodle.app.recorder import record
+    from doodle.input.sources import SyntheticSource
+
+    now = [0.0]
+
+    def sleep(s):
+        now[0] += max(s, 0.0)
+
+    events = []
+    result = record(SyntheticSource(doodle), tmp_path / "live.doodle", clock=lambda: now[0], sleep=sleep,
+                    compiled=compiled, on_event=lambda kind, e: events.append((kind, e)))
+    return result, events
+
+
+def test_replay_and_record_refuse_what_recognize_refuses(tmp_path):
+    """The one Recognizer: ``doodle replay`` and ``doodle record`` apply behaviour states as
+    ``doodle recognize`` does — the jump of a fallen character is refused on every path."""
+    from doodle.app.replay import replay
+    from doodle.input.loader import load
+
+    compiled = load_actions(_library(tmp_path), True)
+    words = JUMP + ["pause"] + FALL + ["pause"] + JUMP + ["pause"] + GET_UP + ["pause"] + JUMP
+    doodle = synth_doodle({"c0": _track(words)}, seed=3)
+    batch = recognize(doodle, compiled)
+    replayed = replay(doodle, compiled)
+    assert sorted(_heard(replayed.found)) == sorted(_batch(doodle, batch))
+    assert [r.action for r in replayed.found].count("Jump") == 2
+    assert _named(replayed.result) == _named(batch)
+    result, events = _recorded(tmp_path, doodle, compiled)
+    on_file = recognize(load(result.path), compiled)
+    assert [a for a, _, _ in result.actions["c0"]] == [s.action for s in on_file["c0"][1] if s.action != "unknown"]
+    assert _named(result.recognised) == _named(on_file) == _named(batch)
+    refused = [e for kind, e in events if kind == "refused"]
+    assert [(e["action"], e["reason"]) for e in refused] == [("Jump", "needs standing")]
+
+
+def test_replay_and_record_drop_an_interaction_as_recognize_does(tmp_path):
+    """Two tracks: the interaction a standing character may perform is reported live by
+    replay and record, and their final reading equals recognize's."""
+    from doodle.app.replay import replay
+
+    compiled = load_actions(_library(tmp_path), True)
+    doodle = synth_doodle({"c0": _track(["T_N_Z", "T_Z"]), "c1": [stroke("T_STILL", 1.5)]}, seed=1,
+                          start_p={"c0": (0.0, 1.0, 0.0), "c1": (0.0, 1.0, 0.2)},
+                          start_q={"c0": (0.0, 0.0, 0.0, 1.0), "c1": (0.0, 1.0, 0.0, 0.0)})
+    batch = recognize(doodle, compiled)
+    want = sorted((name, s.action, s.interaction, s.role) for name, (_, segs) in batch.items() for s in segs
+                  if isinstance(s, InteractionSegment))
+    assert want
+    replayed = replay(doodle, compiled)
+    assert sorted((r.track, r.action, r.interaction, r.role) for r in replayed.found if r.interaction) == want
+    result, events = _recorded(tmp_path, doodle, compiled)
+    live = sorted((e["track"], e["action"], e["interaction"], e["role"]) for kind, e in events
+                  if kind == "action" and "interaction" in e)
+    assert live == want
+    final = sorted((name, s.action, s.interaction, s.role) for name, (_, segs) in result.recognised.items()
+                   for s in segs if isinstance(s, InteractionSegment))
+    assert final == want

@@ -11,7 +11,8 @@ from doodle.core.errors import DoodleError
 from doodle.synth.strokes import stroke, synth_doodle
 from grammar.constraints import (Behaviour, Constraint, State, ground_front, mutual_view, parse_constraint,
                                  sees, within, zone_distance)
-from grammar.contexter import Contexter, InteractionSegment, recognize_interactions
+from grammar.contexter import Contexter, InteractionSegment
+from grammar.recognizer import recognize_interactions
 from grammar.library import compile_library, overlaps
 from grammar.matcher import Segment
 from library.manifest import Interaction, builtin, format_library, load_library
@@ -303,7 +304,6 @@ def test_streaming_contexter_equals_batch(compiled):
     """Tracks read in parallel (``doodle replay``): the interactions reported as the streams
     go are those the batch Contexter finds, each after both roles have ended, and none when
     the characters are apart."""
-    from doodle.app.pipeline import track_automata
     from doodle.app.replay import replay
 
     lib = COMPILED if compiled == "ordinary roles" else BUILTIN
@@ -314,7 +314,7 @@ def test_streaming_contexter_equals_batch(compiled):
         batch = recognize_interactions(doodle, lib)
         want = sorted((tr, s.action, s.interaction, s.role) for tr, segs in batch.items() for s in segs
                       if isinstance(s, InteractionSegment))
-        found, _ = replay(doodle, track_automata(lib, doodle.names), compiled=lib)
+        found = replay(doodle, lib).found
         got = sorted((r.track, r.action, r.interaction, r.role) for r in found if r.interaction)
         assert got == want and bool(got) == expect
         assert all(r.at >= r.end for r in found if r.interaction)

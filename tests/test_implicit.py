@@ -8,7 +8,7 @@ from hypothesis import strategies as st
 
 from doodle.core.errors import DoodleError
 from doodle.core.model import Doodle
-from doodle.app.pipeline import load_actions, recognize
+from grammar.recognizer import load_actions, recognize
 from doodle.synth.implicit import implicit_action, intended_tokens, reach
 
 COMPILED = load_actions()
@@ -58,7 +58,7 @@ def test_end_orientation_is_met_without_a_jump(action, turn):
     from scipy.spatial.transform import Rotation
 
     from doodle.core.model import Doodle
-    from doodle.app.pipeline import recognize
+    from grammar.recognizer import recognize
     from doodle.synth.implicit import end_orientation
 
     track = implicit_action(COMPILED, action)

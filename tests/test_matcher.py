@@ -11,7 +11,7 @@ import pytest
 from doodle.app.cli.main import main
 from doodle.core.errors import DoodleError
 from doodle.core.model import Doodle
-from doodle.app.pipeline import load_actions, recognize
+from grammar.recognizer import load_actions, recognize
 from doodle.input.segmenter import SegmenterParams
 from doodle.synth.strokes import perform, synth_track
 from doodle.core.tokens import CODES, Token

@@ -9,7 +9,7 @@ from hypothesis import strategies as st
 
 from doodle.input.deliberate import Absorber, absorb
 from doodle.synth.performers import GESTURES, MAIN_EXAMPLE, Style, perform, style_grid
-from doodle.app.pipeline import load_actions, recognize
+from grammar.recognizer import load_actions, recognize
 from doodle.input.segmenter import Segmenter, SegmenterParams, tokenize
 from doodle.core.tokens import CODES, Token
 from grammar.matcher import match

@@ -19,7 +19,7 @@ from doodle.input.conventions import to_ours
 from doodle.core.errors import DoodleError
 from doodle.input.loader import load
 from doodle.core.model import Doodle
-from doodle.app.pipeline import load_actions, recognize
+from grammar.recognizer import load_actions, recognize
 from doodle.app.recorder import record
 from doodle.input.sources import OpenVRSource, ReplaySource, SyntheticSource, pose_from_matrix
 from doodle.synth.strokes import lost_tracking, perform
@@ -35,7 +35,7 @@ def compiled():
 
 @pytest.fixture(scope="module")
 def automaton(compiled):
-    return compiled.automaton()
+    return compiled
 
 
 class FakeClock:
@@ -56,7 +56,7 @@ class FakeClock:
 def run(source, path, automaton, **kw):
     fake = FakeClock()
     events = []
-    result = record(source, path, clock=fake.clock, sleep=fake.sleep, automaton=automaton,
+    result = record(source, path, clock=fake.clock, sleep=fake.sleep, compiled=automaton,
                     on_event=lambda kind, payload: events.append((kind, payload)), **kw)
     return result, events, fake
 
@@ -134,7 +134,7 @@ def test_sleeps_until_each_tick(tmp_path, automaton):
                 fake.now += 0.1  # a stall of 9 ticks: skipped, not caught up in a burst
             return super().read()
 
-    record(Stalling(doodle), tmp_path / "paced.doodle", clock=fake.clock, sleep=fake.sleep, automaton=automaton)
+    record(Stalling(doodle), tmp_path / "paced.doodle", clock=fake.clock, sleep=fake.sleep, compiled=automaton)
     period = 1 / 90
     assert len(reads) == len(doodle.t) + 1  # the last read says the source ended
     assert all(s > 0 for s in fake.sleeps)
@@ -336,10 +336,10 @@ def test_record_command_without_steamvr_leaves_no_file(tmp_path, capfd):
 
 
 def test_record_command_with_the_synthetic_source(tmp_path, capsys, monkeypatch, compiled):
-    import doodle.app.pipeline
+    import grammar.recognizer
     from doodle.app.cli.record import add_record_parser
 
-    monkeypatch.setattr(doodle.app.pipeline, "load_actions", lambda *a: compiled)
+    monkeypatch.setattr(grammar.recognizer, "load_actions", lambda *a: compiled)
     parser = argparse.ArgumentParser(prog="doodle")
     add_record_parser(parser.add_subparsers(dest="command"))
     path = tmp_path / "synthetic.doodle"

@@ -7,7 +7,7 @@ import pytest
 
 from doodle.app.cli.main import main
 from doodle.input.loader import load
-from doodle.app.pipeline import load_actions, recognize
+from grammar.recognizer import load_actions, recognize
 from doodle.app.replay import replay
 from doodle.synth.strokes import lost_tracking
 
@@ -17,7 +17,8 @@ DEMO = Path(__file__).resolve().parents[1] / "examples" / "demo.doodle"
 def test_streaming_replay_equals_batch_recognition():
     doodle = load(DEMO)
     compiled = load_actions()
-    found, costs = replay(doodle, compiled.automaton())
+    replayed = replay(doodle, compiled)
+    found, costs = replayed.found, replayed.costs
     _, batch = recognize(doodle, compiled)["c0"]
     t = doodle.t
     assert [(r.action, r.start) for r in found] == [(s.action, float(t[s.start])) for s in batch if s.action != "unknown"]
@@ -31,7 +32,7 @@ def test_two_tracks_and_lost_tracking_stream():
     tr = doodle.tracks[0]
     second = lost_tracking(tr, 2.0, 2.3)
     two = Doodle((tr, type(tr)("c1", second.t, second.p + 1.0, second.q, second.valid)), doodle.rate)
-    found, _ = replay(two, load_actions().automaton())
+    found = replay(two, load_actions()).found
     assert {r.track for r in found} == {"c0", "c1"}
     assert [r.action for r in found if r.track == "c0"] == [r.action for r in found if r.track == "c1"]
 
@@ -48,7 +49,7 @@ def test_pacing_follows_the_clock():
         waits.append(s)
         now[0] += s
 
-    replay(doodle, load_actions().automaton(), speed=2.0, clock=clock, sleep=sleep)
+    replay(doodle, load_actions(), speed=2.0, clock=clock, sleep=sleep)
     assert min(waits) > 0 and sum(waits) == pytest.approx(doodle.t[-1] / 2.0, rel=1e-6)
 
 

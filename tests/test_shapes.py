@@ -110,7 +110,7 @@ def test_held_out_performances_recognised_by_shape(tmp_path, capsys):
 
 def test_streaming_refiner_equals_batch(tmp_path):
     from doodle.input.loader import load
-    from doodle.app.pipeline import load_actions, recognize, track_automata
+    from grammar.recognizer import load_actions, recognize, track_automata
     from doodle.app.replay import replay
 
     lib, files = _learn_all(tmp_path, ["hook_left", "hook_right", "golf_swing"])
@@ -118,7 +118,7 @@ def test_streaming_refiner_equals_batch(tmp_path):
     assert compiled.shapes is not None and set(compiled.shapes.names) == {"hook_left", "hook_right", "golf_swing"}
     for path in (files["hook_left"][3], files["golf_swing"][4]):
         doodle = load(path, convention="unity")
-        found, _ = replay(doodle, track_automata(compiled, doodle.names), shapes=compiled.shapes)
+        found = replay(doodle, compiled).found
         batch = recognize(doodle, compiled)
         expected = sorted((name, s.action, float(doodle.track(name).t[s.start]))
                           for name, (_, segs) in batch.items() for s in segs if s.action != "unknown")

@@ -13,62 +13,15 @@ import numpy as np
 from doodle.core import quat
 from doodle.core.errors import DoodleError
 from doodle.core.model import Doodle
-from doodle.input.segmenter import SegmenterParams, tokenize_doodle
+from doodle.input.segmenter import SegmenterParams
 from doodle.core.tokens import Token
 from grammar.library import Compiled, compile_library
-from grammar.matcher import Segment, match
-from grammar.shapes import refine
+from grammar.matcher import Segment
+from grammar.recognizer import recognize
 from library.manifest import builtin, combine, load_library
 
 
-def load_actions(library_dir=None, use_builtin: bool = True) -> Compiled:
-    """The built-in library, extended or overridden by the one in ``library_dir``."""
-    user = load_library(library_dir) if library_dir else None
-    if not use_builtin and user is None:
-        raise DoodleError("--no-builtin needs --library DIR")
-    return compile_library(combine(builtin() if use_builtin else None, user))
-
-
-def recognize(doodle: Doodle, compiled: Compiled, params: SegmenterParams = SegmenterParams(),
-              threshold: float = 2.0, direction_costs: bool = False,
-              interactions: bool = True) -> dict[str, tuple[list[Token], list[Segment]]]:
-    """Per track: its tokens and the action segments recognised in them — with the
-    library's interactions between tracks recognised by the Contexter (§6.2.1) where the
-    doodle has several tracks (unless ``interactions`` is False)."""
-    tokens = tokenize_doodle(doodle, params)
-    automata = track_automata(compiled, list(tokens), threshold, direction_costs)
-    result = {}
-    for name, toks in tokens.items():
-        segments = match(toks, automata[name], name)
-        if compiled.shapes is not None:  # learned actions re-decided by their examples' shapes
-            track = doodle.track(name)
-            segments = refine(segments, toks, track.p, track.valid, compiled.shapes, name)
-        result[name] = (toks, segments)
-    if interactions and len(result) > 1 and compiled.library.interactions:
-        from grammar.contexter import with_interactions
-
-        resolved = with_interactions(doodle, compiled, result, threshold)
-        result = {name: (toks, resolved[name]) for name, (toks, _) in result.items()}
-    from grammar.contexter import apply_behaviour, behaviours
-
-    rules = behaviours(compiled)
-    if rules:  # behaviour states (§6.3.3): actions whose pre-conditions fail are refused
-        walked = apply_behaviour(doodle, {name: segs for name, (_, segs) in result.items()}, rules,
-                                 frozenset(compiled.library.states), frozenset(compiled.library.names))
-        result = {name: (toks, walked[name]) for name, (toks, _) in result.items()}
-    return result
-
-
-def track_automata(compiled: Compiled, tracks: list[str], threshold: float = 2.0,
-                   direction_costs: bool = False) -> dict:
-    """The Matcher's tables per track: one shared unless some action is bound to a track."""
-    if not compiled.bound:
-        automaton = compiled.automaton(threshold, direction_costs)
-        return {name: automaton for name in tracks}
-    return {name: compiled.automaton(threshold, direction_costs, name) for name in tracks}
-
-
-# --- compile: actions → animation (first version: flat ground, built-in clips) -------------
+# --- compile: actions → animation ------------------------------------------------------------
 
 CHARACTER_HEIGHT = 1.7  # metres
 PROP_SIZE = 0.2  # metres: a 20 cm figurine plays a 1.7 m character
@@ -119,7 +72,7 @@ def compile_doodle(doodle: Doodle, library_dir=None, use_builtin: bool = True, p
 
     user = load_library(library_dir) if library_dir else None
     if not use_builtin and user is None:
-        raise DoodleError("--no-builtin needs --library DIR")
+        raise DoodleError("no actions to compile: the built-in library is left out and no user library is given")
     library = combine(builtin_library() if use_builtin else None, user)
     actions = compile_library(library)
     clips = load_clips(library)

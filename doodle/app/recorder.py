@@ -4,14 +4,17 @@ and recognise actions live.
 :func:`record` is the same loop for SteamVR, a replayed file or a synthetic performance
 (:mod:`doodle.input.sources`). Each frame is written at once with :class:`~doodle.input.fileformat.DoodleWriter`
 (fsync about once a second: a crash or ``kill -9`` loses at most about a second) and every
-track goes through a streaming Segmenter and Matcher, reported through
+track goes through the streaming Recognizer (:class:`grammar.recognizer.Live`), reported through
 ``on_event(kind, payload)``; ``payload`` is a dict:
 
 * ``"started"`` — ``t`` (0.0), ``path``, ``tracks`` (names): the first frame is being written;
 * ``"token"`` — ``track``, ``token``, ``start``, ``end`` (s), ``final``: a token completed
   (``final=True``) or a new token in progress (``final=False``, for live feedback);
 * ``"action"`` — ``track``, ``action``, ``start``, ``end`` (s), ``exact``, ``distance``, ``at``
-  (the recording time when it was recognised);
+  (the recording time when it was recognised); an interaction's roles come once more, with
+  ``interaction`` and ``role``, once the interaction is decided;
+* ``"refused"`` — ``track``, ``action``, ``reason``, ``start``, ``end``, ``at``: an action
+  whose behaviour pre-conditions did not hold (§6.3.3);
 * ``"lost"`` — ``track``, ``t``, ``error``: tracking went away (``error`` None); or, when it
   comes back after a gap too long to bridge (``SegmenterParams.max_gap``), the Segmenter's
   message in ``error``: what was recognised before the gap is final and recognition starts
@@ -35,7 +38,7 @@ from doodle.core import quat
 from doodle.input.devices import IDENTITY, profile
 from doodle.core.errors import DoodleError
 from doodle.input.fileformat import DoodleWriter
-from doodle.input.segmenter import Segmenter, SegmenterParams
+from doodle.input.segmenter import SegmenterParams
 
 
 @dataclass(frozen=True)
@@ -45,92 +48,94 @@ class RecordResult:
     duration: float  # seconds from the first to the last sample
     actions: dict  # track name -> list of (action, start_s, end_s), unknown segments left out
     reason: str  # why it stopped: "end", "seconds", "trigger" or "interrupted"
+    recognised: dict = None  # per track (tokens, segments): the recording decided as doodle recognize does
 
 
 class _Live:
-    """One track's live recognition: Segmenter → Matcher, restarted after a long loss."""
+    """Every track's live recognition (the one Recognizer, :class:`grammar.recognizer.Live`)
+    and what a performer is shown: tokens, actions, refusals, tracking lost and found."""
 
-    def __init__(self, name, rate, params, automaton, mount, times, emit):
-        self.name, self.rate, self.params, self.automaton = name, rate, params, automaton
-        self.mount = None if np.allclose(mount, IDENTITY) else np.asarray(mount, dtype=float)
+    def __init__(self, compiled, names, rate, params, mounts, times, emit):
+        from grammar.recognizer import Live
+
+        self.live = Live(compiled, names, rate, params, source="<recording>", restart=True)
+        self.names, self.params = list(names), params
+        self.mounts = [None if np.allclose(m, IDENTITY) else np.asarray(m, dtype=float) for m in mounts]
         self.times, self.emit = times, emit
-        self.actions: list[tuple[str, float, float]] = []
-        self.tracked, self.lost_at, self.restarted = True, 0.0, False
-        self._start(0)
-
-    def _start(self, offset: int) -> None:
-        from grammar.matcher import Matcher
-
-        self.segmenter = Segmenter(self.rate, self.params, self.name, "<recording>")
-        self.matcher = Matcher(self.automaton, self.name)
-        self.offset, self.shown = offset, None
+        self.actions: dict[str, list[tuple[str, float, float]]] = {n: [] for n in names}
+        self.tracked = {n: True for n in names}
+        self.lost_at = {n: 0.0 for n in names}
+        self.shown: dict[str, str | None] = {n: None for n in names}
 
     def _span(self, start: int, end: int) -> tuple[float, float]:
         last = len(self.times) - 1
-        a = min(self.offset + start, last)
-        return self.times[a], self.times[min(max(self.offset + end - 1, a), last)]
+        a = min(start, last)
+        return self.times[a], self.times[min(max(end - 1, a), last)]
 
-    def push(self, i: int, p, q, ok: bool) -> None:
+    def push(self, i: int, poses) -> None:
         t = self.times[i]
-        if self.mount is not None and ok:
-            q = quat.normalise(quat.multiply(np.asarray(q, dtype=float), self.mount))
-        if self.tracked and not ok:
-            self.lost_at, self.restarted = t, False
-            self.emit("lost", {"track": self.name, "t": t, "error": None})
-        try:
-            tokens = self.segmenter.push(t, p, q, ok)
-        except DoodleError as exc:  # tracking is back after a gap too long to bridge
-            self._finish(flush=False)
-            self.emit("lost", {"track": self.name, "t": t, "error": str(exc)})
-            self._start(i)
-            self.restarted = True
-            tokens = self.segmenter.push(t, p, q, ok)
-        if ok and not self.tracked:
-            self.emit("found", {"track": self.name, "t": t, "gap": t - self.lost_at, "restarted": self.restarted})
-        self.tracked = ok
-        self._read(tokens)
-        pending = self.segmenter.pending
-        if pending is not None and pending.name != self.shown:
-            self.shown = pending.name
-            start, end = self._span(pending.start, pending.end)
-            self.emit("token", {"track": self.name, "token": pending.name, "start": start, "end": end, "final": False})
+        mounted = []
+        for name, mount, (p, q, ok) in zip(self.names, self.mounts, poses):
+            ok = bool(ok)
+            if mount is not None and ok:
+                q = quat.normalise(quat.multiply(np.asarray(q, dtype=float), mount))
+            if self.tracked[name] and not ok:
+                self.lost_at[name] = t
+                self.emit("lost", {"track": name, "t": t, "error": None})
+            mounted.append((p, q, ok))
+        step = self.live.push(t, mounted)
+        for name, why in step.restarted.items():  # back after a gap too long to bridge
+            self.emit("lost", {"track": name, "t": t, "error": why})
+        for name, (_, _, ok) in zip(self.names, mounted):
+            if ok and not self.tracked[name]:
+                self.emit("found", {"track": name, "t": t, "gap": t - self.lost_at[name],
+                                    "restarted": name in step.restarted})
+            self.tracked[name] = ok
+        self._show(step)
+        for name in self.names:
+            pending = self.live.pending(name)
+            if pending is not None and pending.name != self.shown[name]:
+                self.shown[name] = pending.name
+                start, end = self._span(pending.start, pending.end)
+                self.emit("token", {"track": name, "token": pending.name, "start": start, "end": end, "final": False})
 
-    def close(self) -> None:
+    def close(self) -> dict:
         """Flush at the end of the recording (a track lost for longer than ``max_gap`` at the
-        end keeps what was recognised before the loss)."""
-        self._finish(flush=self.tracked or self.times[-1] - self.lost_at <= self.params.max_gap)
+        end keeps what was recognised before the loss); returns the whole recording decided
+        as ``doodle recognize`` decides it."""
+        end = self.times[-1]
+        flush = {n: self.tracked[n] or end - self.lost_at[n] <= self.params.max_gap for n in self.names}
+        self._show(self.live.close(flush))
+        return self.live.result
 
-    def _finish(self, flush: bool) -> None:
-        tokens = []
-        if flush:
-            try:
-                tokens = self.segmenter.close()
-            except DoodleError:  # fewer than two samples since a restart, or never tracked
-                flush = False
-        if not flush:
-            tokens = self.segmenter.cut()
-        self._read(tokens, close=True)
+    def _show(self, step) -> None:
+        from grammar.contexter import InteractionSegment, Refused
 
-    def _read(self, tokens, close: bool = False) -> None:
-        segments = []
-        for token in tokens:
-            start, end = self._span(token.start, token.end)
-            self.emit("token", {"track": self.name, "token": token.name, "start": start, "end": end, "final": True})
-            segments += self.matcher.push(token)
-        if close:
-            segments += self.matcher.close()
-        for s in segments:
+        for name, tokens in step.tokens.items():
+            for token in tokens:
+                start, end = self._span(token.start, token.end)
+                self.emit("token", {"track": name, "token": token.name, "start": start, "end": end, "final": True})
+        for h in step.heard:
+            s = h.segment
+            start, end = self._span(s.start, s.end)
+            if isinstance(s, Refused):
+                self.emit("refused", {"track": h.track, "action": s.refused, "reason": s.reason,
+                                      "start": start, "end": end, "at": self.times[-1]})
+                continue
             if s.action == "unknown":
                 continue
-            start, end = self._span(s.start, s.end)
-            self.actions.append((s.action, start, end))
-            self.emit("action", {"track": self.name, "action": s.action, "start": start, "end": end,
-                                 "exact": s.exact, "distance": s.distance, "at": self.times[-1]})
+            payload = {"track": h.track, "action": s.action, "start": start, "end": end,
+                       "exact": s.exact, "distance": s.distance, "at": self.times[-1]}
+            if isinstance(s, InteractionSegment):
+                payload.update(interaction=s.interaction, role=s.role)
+            else:
+                self.actions[h.track].append((s.action, start, end))
+            self.emit("action", payload)
 
 
 def record(source, path, *, clock=time.monotonic, sleep=time.sleep, wait_for_trigger: bool = False,
            max_seconds: float | None = None, on_event=None, library_dir=None, use_builtin: bool = True,
-           params: SegmenterParams = SegmenterParams(), automaton=None, overwrite: bool = False) -> RecordResult:
+           params: SegmenterParams = SegmenterParams(), compiled=None, overwrite: bool = False) -> RecordResult:
     """Record ``source`` (see :mod:`doodle.input.sources`) into the doodle file ``path``.
 
     Reads one frame per tick of ``1/source.rate`` seconds on ``clock``, sleeping until each
@@ -138,7 +143,9 @@ def record(source, path, *, clock=time.monotonic, sleep=time.sleep, wait_for_tri
     ``wait_for_trigger`` the recording starts at the first trigger press and stops at the
     next; otherwise it runs until the source ends, ``max_seconds`` of recording, or Ctrl-C
     (KeyboardInterrupt ends it cleanly). Actions come from the built-in library, extended by
-    ``library_dir`` (``automaton`` given instead skips compiling it). The caller closes the
+    ``library_dir`` (``compiled``, a compiled library, given instead skips compiling it),
+    recognised by the one Recognizer as ``doodle recognize`` does: learned shapes,
+    interactions between tracks and behaviour states included. The caller closes the
     source. The file is created at the first recorded frame; an existing file is refused
     unless ``overwrite``. Raises DoodleError when fewer than two samples were recorded
     (nothing is left on disk then).
@@ -148,15 +155,15 @@ def record(source, path, *, clock=time.monotonic, sleep=time.sleep, wait_for_tri
         raise DoodleError(f"{path}: already exists (pass --overwrite to replace it)")
     if max_seconds is not None and not (max_seconds > 0 and np.isfinite(max_seconds)):
         raise DoodleError(f"recording length must be a positive number of seconds, not {max_seconds!r}")
-    if automaton is None:  # per track (actions may be bound to one); shapes are applied on replay and compile
-        from doodle.app.pipeline import load_actions, track_automata
+    if compiled is None:
+        from grammar.recognizer import load_actions
 
-        automaton = track_automata(load_actions(library_dir, use_builtin), [name for name, _, _ in source.tracks])
+        compiled = load_actions(library_dir, use_builtin)
     emit = on_event or (lambda kind, payload: None)
     rate = float(source.rate)
     period = 1.0 / rate
     mount = profile(source.device).mount
-    writer, lives, times, t0, reason = None, [], [], None, "end"
+    writer, live, times, t0, reason = None, None, [], None, "end"
     try:
         try:
             tick = clock()
@@ -175,8 +182,8 @@ def record(source, path, *, clock=time.monotonic, sleep=time.sleep, wait_for_tri
                         continue
                     t0 = frame.t
                     writer = DoodleWriter(path, source.tracks, rate, source.device, overwrite=overwrite)
-                    lives = [_Live(name, rate, params, automaton[name] if isinstance(automaton, dict) else automaton,
-                                   mount, times, emit) for name, _, _ in source.tracks]
+                    names = [name for name, _, _ in source.tracks]
+                    live = _Live(compiled, names, rate, params, [mount] * len(names), times, emit)
                     emit("started", {"t": 0.0, "path": str(path), "tracks": [name for name, _, _ in source.tracks]})
                 elif wait_for_trigger and frame.trigger:
                     reason = "trigger"
@@ -189,13 +196,10 @@ def record(source, path, *, clock=time.monotonic, sleep=time.sleep, wait_for_tri
                     continue  # nothing new since the last poll
                 writer.append(t, frame.poses)
                 times.append(t)
-                for live, (p, q, ok) in zip(lives, frame.poses):
-                    live.push(len(times) - 1, p, q, bool(ok))
+                live.push(len(times) - 1, frame.poses)
         except KeyboardInterrupt:
             reason = "interrupted"
-        if len(times) >= 2:
-            for live in lives:
-                live.close()
+        result = live.close() if len(times) >= 2 else {}
     finally:
         if writer is not None:
             writer.close()
@@ -206,4 +210,4 @@ def record(source, path, *, clock=time.monotonic, sleep=time.sleep, wait_for_tri
         if t0 is None and wait_for_trigger:
             raise DoodleError(f"{path}: the trigger was never pressed; nothing recorded")
         raise DoodleError(f"{path}: recording stopped after {len(times)} sample(s); nothing recorded")
-    return RecordResult(path, len(times), times[-1], {live.name: live.actions for live in lives}, reason)
+    return RecordResult(path, len(times), times[-1], live.actions, reason, result)

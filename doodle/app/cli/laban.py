@@ -165,7 +165,8 @@ def cmd_eval(args) -> int:
 def cmd_classify(args) -> int:
     from laban.models import load as load_model
     from doodle.input.loader import load
-    from doodle.app.pipeline import effort_quality, load_actions, recognize
+    from doodle.app.pipeline import effort_quality
+    from grammar.recognizer import load_actions, recognize
     from doodle.input.segmenter import SegmenterParams
 
     model = load_model(args.model)

@@ -108,7 +108,7 @@ def _library_options(p: argparse.ArgumentParser) -> None:
 
 
 def cmd_recognize(args) -> int:
-    from doodle.app.pipeline import load_actions, recognize
+    from grammar.recognizer import load_actions, recognize
 
     params, mounts = _params(args)
     compiled = load_actions(args.library, not args.no_builtin)
@@ -284,7 +284,7 @@ def cmd_stylize(args) -> int:
 
 
 def cmd_library(args) -> int:
-    from doodle.app.pipeline import load_actions
+    from grammar.recognizer import load_actions
     from grammar.library import overlaps, swallowed
 
     if args.library_command == "import":
@@ -550,6 +550,8 @@ def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     warnings.showwarning = _warning
     try:
+        if getattr(args, "no_builtin", False) and not getattr(args, "library", None):
+            raise DoodleError("--no-builtin needs --library DIR")
         return args.run(args)
     except DoodleError as e:
         _error(e)

@@ -66,7 +66,10 @@ class _View:
     def __call__(self, kind: str, e: dict) -> None:
         if kind == "action":
             how = "" if e["exact"] else f"  (distance {e['distance']:g})"
-            self.line(f"  {e['start']:7.2f} s  {e['track']}  {e['action']}{how}")
+            role = f"  [{e['interaction']}, role {e['role']}]" if "interaction" in e else ""
+            self.line(f"  {e['start']:7.2f} s  {e['track']}  {e['action']}{how}{role}")
+        elif kind == "refused":
+            self.line(f"  {e['start']:7.2f} s  {e['track']}  {e['action']} refused: {e['reason']}")
         elif kind == "token" and not e["final"]:
             self.pending[e["track"]] = e["token"]
             self.status()
@@ -84,7 +87,7 @@ class _View:
 
 
 def cmd_record(args) -> int:
-    from doodle.app.pipeline import load_actions, track_automata
+    from grammar.recognizer import load_actions
     from doodle.app.recorder import record
 
     out = Path(args.output)
@@ -94,12 +97,12 @@ def cmd_record(args) -> int:
         raise DoodleError(f"--seconds must be a positive number, not {args.seconds:g}")
     source = _open_source(args)
     try:
-        automaton = track_automata(load_actions(args.library, not args.no_builtin), [n for n, _, _ in source.tracks])
+        compiled = load_actions(args.library, not args.no_builtin)
         tracks = ", ".join(f"{n} ({' '.join(x for x in (r, s) if x)})" if r or s else n for n, r, s in source.tracks)
         how = "press the trigger to start and again to stop" if args.trigger else "Ctrl-C to stop"
         print(f"{source.device}: {tracks} at {source.rate:g} Hz; {how}", flush=True)
         result = record(source, out, wait_for_trigger=args.trigger, max_seconds=args.seconds, on_event=_View(),
-                        automaton=automaton, overwrite=args.overwrite)
+                        compiled=compiled, overwrite=args.overwrite)
     finally:
         source.close()
     why = {"end": "end of the source", "seconds": f"{args.seconds} s", "trigger": "trigger",

@@ -23,7 +23,7 @@ def cmd_replay(args) -> int:
     import numpy as np
 
     from doodle.app.cli.main import _load, _params
-    from doodle.app.pipeline import load_actions, track_automata
+    from grammar.recognizer import load_actions
     from doodle.app.replay import replay
 
     if not (args.speed >= 0 and np.isfinite(args.speed)):
@@ -31,7 +31,6 @@ def cmd_replay(args) -> int:
     params, mounts = _params(args)
     doodle = _load(args.file, args, mounts)
     compiled = load_actions(args.library, not args.no_builtin)
-    automata = track_automata(compiled, doodle.names, args.threshold)
     pace = "flat out" if not args.speed else f"{args.speed:g}× real time"
     print(f"{args.file}: {len(doodle.tracks)} track(s), {doodle.t[-1]:.2f} s, replayed {pace}", flush=True)
 
@@ -41,8 +40,8 @@ def cmd_replay(args) -> int:
         print(f"  {r.at:8.2f} s  {r.track}  {r.action:<16} {r.start:7.2f}–{r.end:7.2f} s  {how:<12} "
               f"latency {r.latency:.2f} s{role}", flush=True)
 
-    found, costs = replay(doodle, automata, params, args.speed or None, show, shapes=compiled.shapes,
-                          compiled=compiled, threshold=args.threshold)
+    replayed = replay(doodle, compiled, params, args.speed or None, show, threshold=args.threshold)
+    found, costs = replayed.found, replayed.costs
     actions = [r for r in found if not r.interaction]
     lat = [r.latency for r in actions]
     together = len({(r.interaction, r.start) for r in found if r.interaction and r.role == 0})

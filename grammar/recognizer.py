@@ -1,0 +1,314 @@
+"""The one Recognizer: a doodle's samples to the actions its tracks perform, for every path.
+
+Stages, in order (SPEC grammar): the Segmenter's tokens (:mod:`doodle.input.segmenter`) →
+the Matcher's segments (:mod:`grammar.matcher`) → learned actions re-decided by their shapes
+(:class:`grammar.shapes.Refiner`) → interactions between tracks (the Contexter,
+:mod:`grammar.contexter`) → behaviour states (refused actions, §6.3.3).
+
+* :func:`recognize` is the batch form (``doodle recognize`` and ``doodle compile``): each
+  track tokenised whole (vectorised), matched and refined, then :func:`decide`.
+* :class:`Live` is the streaming form (``doodle replay`` and ``doodle record``): samples
+  pushed one at a time go through the streaming Segmenter, Matcher and Refiner — each equal
+  to its batch form — and are reported as soon as each is final, with interactions
+  (:class:`grammar.contexter.LiveContexter`) and behaviour states applied as they come.
+  When the stream closes, :meth:`Live.close` decides the whole performance with the same
+  :func:`decide` as the batch, on the same tokens and segments, so what replay and record
+  end with is what ``recognize`` says of the file.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from doodle.core.errors import DoodleError
+from doodle.core.tokens import Token
+from doodle.input.segmenter import Segmenter, SegmenterParams, tokenize_doodle
+from grammar.constraints import RADIUS
+from grammar.contexter import InteractionSegment, LiveContexter, Refused, apply_behaviour, behaviours, with_interactions
+from grammar.library import Compiled, compile_library
+from grammar.matcher import Matcher, Segment, match
+from grammar.shapes import Refiner, refine
+from library.manifest import builtin, combine, load_library
+
+
+def load_actions(library_dir=None, use_builtin: bool = True) -> Compiled:
+    """The built-in library, extended or overridden by the one in ``library_dir``."""
+    user = load_library(library_dir) if library_dir else None
+    if not use_builtin and user is None:
+        raise DoodleError("no actions to recognise: the built-in library is left out and no user library is given")
+    return compile_library(combine(builtin() if use_builtin else None, user))
+
+
+def track_automata(compiled: Compiled, tracks: list[str], threshold: float = 2.0,
+                   direction_costs: bool = False) -> dict:
+    """The Matcher's tables per track: one shared unless some action is bound to a track."""
+    if not compiled.bound:
+        automaton = compiled.automaton(threshold, direction_costs)
+        return {name: automaton for name in tracks}
+    return {name: compiled.automaton(threshold, direction_costs, name) for name in tracks}
+
+
+def recognize(doodle, compiled: Compiled, params: SegmenterParams = SegmenterParams(),
+              threshold: float = 2.0, direction_costs: bool = False,
+              interactions: bool = True) -> dict[str, tuple[list[Token], list[Segment]]]:
+    """Per track: its tokens and the action segments recognised in them — with the
+    library's interactions between tracks (unless ``interactions`` is False) and behaviour
+    states applied (:func:`decide`)."""
+    tokens = tokenize_doodle(doodle, params)
+    automata = track_automata(compiled, list(tokens), threshold, direction_costs)
+    result = {}
+    for name, toks in tokens.items():
+        segments = match(toks, automata[name], name)
+        if compiled.shapes is not None:  # learned actions re-decided by their examples' shapes
+            track = doodle.track(name)
+            segments = refine(segments, toks, track.p, track.valid, compiled.shapes, name)
+        result[name] = (toks, segments)
+    return decide(doodle, compiled, result, threshold, interactions)
+
+
+def decide(doodle, compiled: Compiled, result: dict, threshold: float = 2.0, interactions: bool = True) -> dict:
+    """Per-track ``(tokens, segments)`` of the Matcher and Refiner, with the library's
+    interactions recognised across tracks (§6.2.1) where the doodle has several, and then
+    behaviour states (§6.3.3): actions whose pre-conditions fail become :class:`Refused`."""
+    if interactions and len(result) > 1 and compiled.library.interactions:
+        resolved = with_interactions(doodle, compiled, result, threshold)
+        result = {name: (toks, resolved[name]) for name, (toks, _) in result.items()}
+    rules = behaviours(compiled)
+    if rules:
+        walked = apply_behaviour(doodle, {name: segs for name, (_, segs) in result.items()}, rules,
+                                 frozenset(compiled.library.states), frozenset(compiled.library.names))
+        result = {name: (toks, walked[name]) for name, (toks, _) in result.items()}
+    return result
+
+
+def recognize_interactions(doodle, compiled: Compiled, params: SegmenterParams | None = None,
+                           threshold: float = 2.0, radius: float | dict = RADIUS,
+                           mode: str = "any") -> dict[str, list[Segment]]:
+    """Per track, the segments of :func:`recognize` (without its interactions) with the
+    library's interactions recognised across tracks by a Contexter of the given ``radius``
+    and ``mode`` (:class:`~grammar.contexter.InteractionSegment` where they are)."""
+    recognised = recognize(doodle, compiled, params or SegmenterParams(), threshold, interactions=False)
+    return with_interactions(doodle, compiled, recognised, threshold, radius, mode)
+
+
+# --- streaming ---------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class Heard:
+    """One thing the stream has decided: a segment of ``track`` (an action, a
+    :class:`Refused` one, or an :class:`InteractionSegment` role once the interaction is
+    decided). Sample indices are the track's, from the stream's first sample."""
+
+    track: str
+    segment: Segment
+
+
+class _Tape:
+    """The samples pushed so far, per track, in growing arrays (a doodle's ``track(name)``
+    and ``tracks`` for the Refiner and the Contexter, which read what is known so far)."""
+
+    def __init__(self, names: list[str]):
+        self.names = list(names)
+        self.n = 0
+        self._t = np.zeros(64)
+        self._p = {n: np.zeros((64, 3)) for n in names}
+        self._q = {n: np.tile([0.0, 0.0, 0.0, 1.0], (64, 1)) for n in names}
+        self._valid = {n: np.zeros(64, dtype=bool) for n in names}
+
+    def append(self, t: float, poses) -> None:
+        if self.n == len(self._t):
+            grow = len(self._t)
+            self._t = np.concatenate([self._t, np.zeros(grow)])
+            for n in self.names:
+                self._p[n] = np.concatenate([self._p[n], np.zeros((grow, 3))])
+                self._q[n] = np.concatenate([self._q[n], np.tile([0.0, 0.0, 0.0, 1.0], (grow, 1))])
+                self._valid[n] = np.concatenate([self._valid[n], np.zeros(grow, dtype=bool)])
+        self._t[self.n] = t
+        for n, (p, q, ok) in zip(self.names, poses):
+            self._p[n][self.n], self._q[n][self.n], self._valid[n][self.n] = p, q, bool(ok)
+        self.n += 1
+
+    def track(self, name: str) -> "_TrackView":
+        k = self.n
+        return _TrackView(name, self._t[:k], self._p[name][:k], self._q[name][:k], self._valid[name][:k])
+
+    @property
+    def tracks(self) -> tuple:
+        return tuple(self.track(n) for n in self.names)
+
+
+@dataclass(frozen=True)
+class _TrackView:
+    name: str
+    t: np.ndarray
+    p: np.ndarray
+    q: np.ndarray
+    valid: np.ndarray
+
+
+class _Chain:
+    """One track's Segmenter → Matcher → Refiner, from sample ``offset`` of the stream."""
+
+    def __init__(self, live: "Live", name: str, offset: int):
+        self.name, self.offset = name, offset
+        self.segmenter = Segmenter(live.rate, live.params, name, live.source)
+        self.matcher = Matcher(live.automata[name], name)
+        shapes = live.compiled.shapes
+        self.refiner = Refiner(shapes, np.zeros((0, 3)), np.zeros(0, dtype=bool), name) if shapes is not None else None
+        self.tokens: list[Token] = []
+        self.segments: list[Segment] = []
+
+    def feed(self, tokens: list[Token], tape: _Tape, close: bool = False) -> list[Segment]:
+        segments = []
+        for token in tokens:
+            self.tokens.append(token)
+            segments += self._refined(self.matcher.push(token), tape, token)
+        if close:
+            segments += self._refined(self.matcher.close(), tape, None, close=True)
+        self.segments += segments
+        return segments
+
+    def _refined(self, segments: list[Segment], tape: _Tape, token, close: bool = False) -> list[Segment]:
+        if self.refiner is None:
+            return segments
+        view = tape.track(self.name)
+        self.refiner.p, self.refiner.valid = view.p[self.offset:], view.valid[self.offset:]
+        if token is not None:
+            self.refiner.tokens.append(token)
+        out = self.refiner.push(segments)
+        return out + self.refiner.close() if close else out
+
+
+def _shifted(s: Segment, samples: int, tokens: int) -> Segment:
+    if not samples and not tokens:
+        return s
+    return replace(s, first=s.first + tokens, stop=s.stop + tokens, start=s.start + samples, end=s.end + samples)
+
+
+@dataclass(frozen=True)
+class Step:
+    """What one frame (or the end of the stream) made final."""
+
+    tokens: dict  # track -> tokens made final (sample indices from the stream's start)
+    heard: list  # Heard, in the order they were decided
+    restarted: dict  # track -> why its recognition started afresh at this frame
+
+
+class Live:
+    """Streaming recognition of the tracks ``names`` (all sampled together at ``rate``).
+
+    :meth:`push` one frame (a time and one ``(p, q, ok)`` per track) at a time; it returns
+    what became final (a :class:`Step`): each track's segments as the Matcher and Refiner
+    decide them, with behaviour states applied per track as they come, and an interaction's
+    roles once every track has decided past it. :meth:`close` ends the stream and returns
+    the rest; :attr:`result` is then the whole performance decided as :func:`recognize`
+    decides it. With ``restart``, a track whose samples the Segmenter refuses (tracking back
+    after a gap too long to bridge) starts afresh at that frame, what came before staying
+    final (live recording); without, the error propagates (a file is read as a whole).
+    """
+
+    def __init__(self, compiled: Compiled, names: list[str], rate: float, params: SegmenterParams = SegmenterParams(),
+                 threshold: float = 2.0, source: str = "<stream>", automata: dict | None = None,
+                 restart: bool = False):
+        self.compiled, self.names, self.rate, self.params = compiled, list(names), float(rate), params
+        self.threshold, self.source, self.restart = threshold, source, restart
+        self.automata = automata if automata is not None else track_automata(compiled, self.names, threshold)
+        self.tape = _Tape(self.names)
+        self.chains = {n: _Chain(self, n, 0) for n in self.names}
+        self._done = {n: ([], []) for n in self.names}  # tokens and segments of finished chains, shifted
+        self._rules = behaviours(compiled)
+        self._state = {n: frozenset(compiled.library.states) for n in self.names}
+        self._contexter = None
+        if len(self.names) > 1 and compiled.library.interactions:
+            self._contexter = LiveContexter(self.tape, compiled, threshold)
+        self.result: dict | None = None
+
+    def pending(self, name: str) -> Token | None:
+        """The token in progress on a track (live feedback)."""
+        chain = self.chains[name]
+        token = chain.segmenter.pending
+        return None if token is None else Token(token.name, token.start + chain.offset, token.end + chain.offset)
+
+    def push(self, t: float, poses) -> Step:
+        """One frame: a time and one ``(p, q, ok)`` per track, in the order of ``names``."""
+        self.tape.append(t, poses)
+        tokens, heard, restarted = {}, [], {}
+        for name, (p, q, ok) in zip(self.names, poses):
+            try:
+                new = self.chains[name].segmenter.push(t, p, q, ok)
+            except DoodleError as exc:
+                if not self.restart:
+                    raise
+                old, h = self._finish(name, flush=False)
+                heard += h
+                self.chains[name] = _Chain(self, name, self.tape.n - 1)
+                restarted[name] = str(exc)
+                new = self.chains[name].segmenter.push(t, p, q, ok)
+                tokens[name] = old
+            tokens[name] = tokens.get(name, []) + self._global(name, new)
+            heard += self._heard(name, self.chains[name].feed(new, self.tape), new)
+        return Step(tokens, heard, restarted)
+
+    def close(self, flush: dict | None = None) -> Step:
+        """End every track; ``flush[name]`` False ends a track where its classification
+        stands (tracking lost for good at the end), without the samples still being smoothed."""
+        tokens, heard = {}, []
+        for name in self.names:
+            tokens[name], new = self._finish(name, True if flush is None else flush.get(name, True))
+            heard += new
+        if self._contexter is not None:
+            heard += self._interactions(self._contexter.close())
+        view = {n: tuple(self._done[n]) for n in self.names}
+        self.result = decide(self.tape, self.compiled, view, self.threshold)
+        return Step(tokens, heard, {})
+
+    def _global(self, name: str, tokens: list[Token]) -> list[Token]:
+        off = self.chains[name].offset
+        return [Token(k.name, k.start + off, k.end + off) for k in tokens] if off else list(tokens)
+
+    def _finish(self, name: str, flush: bool) -> tuple[list[Token], list[Heard]]:
+        chain = self.chains[name]
+        tokens = []
+        if flush:
+            try:
+                tokens = chain.segmenter.close()
+            except DoodleError:  # fewer than two samples since a restart, or never tracked
+                flush = False
+        if not flush:
+            tokens = chain.segmenter.cut()
+        heard = self._heard(name, chain.feed(tokens, self.tape, close=True), tokens)
+        done_tokens, done_segments = self._done[name]
+        shift = len(done_tokens)
+        done_tokens += self._global(name, chain.tokens)
+        done_segments += [_shifted(s, chain.offset, shift) for s in chain.segments]
+        return self._global(name, tokens), heard
+
+    def _heard(self, name: str, segments: list[Segment], tokens: list[Token]) -> list[Heard]:
+        chain = self.chains[name]
+        shift = len(self._done[name][0])
+        segments = [_shifted(s, chain.offset, shift) for s in segments]
+        out = []
+        if self._contexter is not None:
+            for token in self._global(name, tokens):
+                out += self._interactions(self._contexter.push_token(name, token))
+            out += self._interactions(self._contexter.push_segments(name, segments))
+        for s in segments:
+            rule = self._rules.get(s.action)
+            if rule is not None:
+                if rule.allowed(self._state[name]):
+                    self._state[name] = rule.after(self._state[name])
+                else:
+                    s = Refused("unknown", s.first, s.stop, s.start, s.end, False, None,
+                                refused=s.action, reason=rule.why(self._state[name]))
+            out.append(Heard(name, s))
+        return out
+
+    def _interactions(self, found) -> list[Heard]:
+        out = []
+        for f, segs in found:
+            for role, (name, s) in enumerate(zip(f.tracks, segs)):
+                out.append(Heard(name, InteractionSegment(s.action, s.first, s.stop, s.start, s.end, s.exact,
+                                                          s.distance, interaction=f.interaction, role=role)))
+        return out
