@@ -323,10 +323,10 @@ def test_missing_steamvr_is_one_clear_line(capfd):
 
 def test_record_command_without_steamvr_leaves_no_file(tmp_path, capfd):
     _no_steamvr()
-    from doodle.app.cli.record import add_record_parser
+    from doodle.app.cli.record import add_parser
 
     parser = argparse.ArgumentParser(prog="doodle")
-    add_record_parser(parser.add_subparsers(dest="command"))
+    add_parser(parser.add_subparsers(dest="command"))
     path = tmp_path / "live.doodle"
     args = parser.parse_args(["record", "-o", str(path), "--seconds", "5", "--trigger"])
     with pytest.raises(DoodleError, match="SteamVR is not running.*doodle replay"):
@@ -337,11 +337,11 @@ def test_record_command_without_steamvr_leaves_no_file(tmp_path, capfd):
 
 def test_record_command_with_the_synthetic_source(tmp_path, capsys, monkeypatch, compiled):
     import grammar.recognizer
-    from doodle.app.cli.record import add_record_parser
+    from doodle.app.cli.record import add_parser
 
     monkeypatch.setattr(grammar.recognizer, "load_actions", lambda *a: compiled)
     parser = argparse.ArgumentParser(prog="doodle")
-    add_record_parser(parser.add_subparsers(dest="command"))
+    add_parser(parser.add_subparsers(dest="command"))
     path = tmp_path / "synthetic.doodle"
     args = parser.parse_args(["record", "-o", str(path), "--source", "synthetic", "--seconds", "0.6"])
     assert args.run(args) == 0

@@ -110,7 +110,7 @@ def test_held_out_performances_recognised_by_shape(tmp_path, capsys):
 
 def test_streaming_refiner_equals_batch(tmp_path):
     from doodle.input.loader import load
-    from grammar.recognizer import load_actions, recognize, track_automata
+    from grammar.recognizer import load_actions, recognize
     from doodle.app.replay import replay
 
     lib, files = _learn_all(tmp_path, ["hook_left", "hook_right", "golf_swing"])

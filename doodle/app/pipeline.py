@@ -14,11 +14,9 @@ from doodle.core import quat
 from doodle.core.errors import DoodleError
 from doodle.core.model import Doodle
 from doodle.input.segmenter import SegmenterParams
-from doodle.core.tokens import Token
-from grammar.library import Compiled, compile_library
-from grammar.matcher import Segment
+from grammar.library import compile_library
 from grammar.recognizer import recognize
-from library.manifest import builtin, combine, load_library
+from library.manifest import load_library
 
 
 # --- compile: actions → animation ------------------------------------------------------------

@@ -12,7 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from doodle.core.model import Doodle
-from doodle.input.segmenter import Segmenter, SegmenterParams
+from doodle.input.segmenter import SegmenterParams
 
 
 @dataclass(frozen=True)

@@ -45,7 +45,7 @@ import numpy as np
 
 from doodle.input.conventions import CONVENTIONS, from_ours, to_ours
 from doodle.core.errors import DoodleError, where
-from doodle.core.files import atomic_path, atomic_write
+from doodle.core.files import atomic_write
 from doodle.core.model import Doodle, Track
 
 VERSION = 1

@@ -98,7 +98,7 @@ def labelled(items, track: str = "c0") -> list:
 
 
 def cmd_train(args) -> int:
-    from doodle.app.cli.main import progress_bar
+    from doodle.app.cli.options import progress_bar
     from laban.models import save
     from laban.train import DEFAULT_DATA, generated, train
 

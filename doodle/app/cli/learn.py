@@ -15,7 +15,9 @@ from pathlib import Path
 from doodle.core.errors import DoodleError
 
 
-def add_parser(sub, input_options, segmenter_options) -> None:
+def add_parser(sub) -> None:
+    from doodle.app.cli.options import input_options, segmenter_options
+
     p = sub.add_parser("learn", help="learn a new action from three (or more) performed examples")
     p.add_argument("name", help="the new action's name")
     p.add_argument("examples", nargs="*", help="doodle or CSV files, one performance each")
@@ -70,7 +72,7 @@ def record_takes(name: str, folder: Path, takes: int = TAKES, sleep=time.sleep) 
 
 
 def cmd_learn(args) -> int:
-    from doodle.app.cli.main import _load, _params
+    from doodle.app.cli.options import load_input, segmenter_params
     from doodle.core.files import atomic_write
     from grammar.learn import learn
     from grammar.library import compile_library, overlaps
@@ -85,8 +87,8 @@ def cmd_learn(args) -> int:
     name = args.name.strip()
     if not name or any(c in name for c in "\"\n[]"):
         raise DoodleError(f"{args.name!r} is not a usable action name")
-    params, mounts = _params(args)
-    doodles = [_load(path, args, mounts) for path in args.examples]
+    params, mounts = segmenter_params(args)
+    doodles = [load_input(path, args, mounts) for path in args.examples]
     tracks = doodles[0].names if args.tracks else doodles[0].names[:1]
     for path, d in zip(args.examples, doodles):
         missing = [t for t in tracks if t not in d.names]

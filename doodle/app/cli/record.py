@@ -22,7 +22,7 @@ DEMO = [("T_STILL", 0.8, None), ("T_X", 1.2, 0.12), ("T_STILL", 0.5, None), ("T_
         ("T_Y", 0.3, 0.06), ("T_N_Y", 0.25, 0.06), ("T_STILL", 0.8, None)]
 
 
-def add_record_parser(sub) -> None:
+def add_parser(sub) -> None:
     p = sub.add_parser("record", help="record a doodle from the controllers (SteamVR), showing actions live")
     p.add_argument("-o", "--output", required=True, metavar="FILE.doodle")
     p.add_argument("--source", choices=["openvr", "synthetic"], default="openvr",

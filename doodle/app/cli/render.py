@@ -55,7 +55,7 @@ def _label(results, frame: int, fps: float) -> str:
 
 def cmd_render(args) -> int:
     from doodle.app import render
-    from doodle.app.cli.main import progress_bar
+    from doodle.app.cli.options import progress_bar
 
     out = Path(args.output)
     suffix = out.suffix.lower()

@@ -7,7 +7,9 @@ import sys
 from doodle.core.errors import DoodleError
 
 
-def add_parser(sub, input_options, segmenter_options) -> None:
+def add_parser(sub) -> None:
+    from doodle.app.cli.options import input_options, segmenter_options
+
     p = sub.add_parser("replay", help="stream a recorded doodle through the live recogniser, printing actions")
     p.add_argument("file")
     p.add_argument("--speed", type=float, default=1.0, help="1 real time (default), 2 twice as fast, 0 flat out")
@@ -22,14 +24,14 @@ def add_parser(sub, input_options, segmenter_options) -> None:
 def cmd_replay(args) -> int:
     import numpy as np
 
-    from doodle.app.cli.main import _load, _params
+    from doodle.app.cli.options import load_input, segmenter_params
     from grammar.recognizer import load_actions
     from doodle.app.replay import replay
 
     if not (args.speed >= 0 and np.isfinite(args.speed)):
         raise DoodleError(f"--speed must be 0 (flat out) or a positive number, not {args.speed:g}")
-    params, mounts = _params(args)
-    doodle = _load(args.file, args, mounts)
+    params, mounts = segmenter_params(args)
+    doodle = load_input(args.file, args, mounts)
     compiled = load_actions(args.library, not args.no_builtin)
     pace = "flat out" if not args.speed else f"{args.speed:g}× real time"
     print(f"{args.file}: {len(doodle.tracks)} track(s), {doodle.t[-1]:.2f} s, replayed {pace}", flush=True)

@@ -1,0 +1,98 @@
+"""``doodle compile``: a doodle into BVH (one file per track), report.json and previews."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+from doodle.core.errors import DoodleError
+from doodle.app.cli.options import input_options, library_options, load_input, progress_bar, segmenter_options, segmenter_params
+
+
+def add_parser(sub) -> None:
+    p = sub.add_parser("compile", help="compile a doodle into BVH animation (one file per track) and report.json")
+    p.add_argument("file", metavar="FILE")
+    p.add_argument("-o", "--output", required=True, metavar="OUTDIR")
+    input_options(p)
+    library_options(p)
+    p.add_argument("--fps", type=float, default=30.0, help="output frame rate (default 30)")
+    p.add_argument("--scale", type=float, help="doodle-to-world scale (default 8.5: a 20 cm prop, a 1.7 m character)")
+    p.add_argument("--threshold", type=float, default=2.0, help="edit-distance threshold of approximate matches")
+    p.add_argument("--terrain", metavar="SPEC", help="flat[:H], jacksboro[:SIZE], s1045[:SIZE], "
+                   "heightfield:FILE.npz[:SPACING] or mesh:FILE.obj|ply|glb (default flat)")
+    p.add_argument("--no-foot-pinning", action="store_true", help="leave feet as the blended clips put them")
+    p.add_argument("--jump-arc", choices=["clip", "hermite", "apex"], default="clip",
+                   help="jump height from the clip (default), a Hermite arc (alpha 2.5), or one keeping the doodle's apex")
+    p.add_argument("--preview", action="store_true", help="also draw plan.png (paths) and keyframes.png (poses)")
+    p.add_argument("--time", type=float, default=0.0, help="Laban Time for every segment: sustained -1 … sudden 1")
+    p.add_argument("--weight", type=float, default=0.0, help="Laban Weight for every segment: light -1 … strong 1")
+    p.add_argument("--edits", metavar="FILE.json", help="per-segment time and weight (see README)")
+    p.add_argument("--effort-model", metavar="MODEL.npz",
+                   help="Laban Effort model for segments without a given quality (default: the shipped one)")
+    p.add_argument("--no-effort", action="store_true", help="do not recognise Time and Weight: neutral unless given")
+    p.add_argument("--style", choices=["modifiers", "preferred"], default="modifiers",
+                   help="Laban as the thesis's Time/Weight modifiers, or its study's preferred combination "
+                        "(gesture retiming + motion scale + reshaping)")
+    p.add_argument("--retime", choices=["uniform", "gesture"], default="uniform",
+                   help="one-shot clips at an even pace (default) or following the hand's own timing (5.3.3)")
+    segmenter_options(p)
+    p.set_defaults(run=cmd_compile)
+
+
+def cmd_compile(args) -> int:
+    from doodle.core.files import atomic_write
+    from doodle.app.pipeline import compile_doodle, quality
+    from doodle.app.report import compiled as compiled_report
+    from retarget.bvh import write_bvh
+
+    from retarget.terrain import parse_terrain
+
+    params, mounts = segmenter_params(args)
+    terrain = parse_terrain(args.terrain) if args.terrain else None
+    doodle = load_input(args.file, args, mounts)
+    from doodle.app.pipeline import read_edits
+
+    qualities = read_edits(args.edits) if args.edits else {}
+    for name, value in (("--time", args.time), ("--weight", args.weight)):
+        if not -1.0 <= value <= 1.0:
+            raise DoodleError(f"{name} must be between -1 and 1, not {value:g}")
+    for name, value in (("--fps", args.fps), ("--scale", args.scale if args.scale is not None else 1.0)):
+        if not (value > 0 and value < float("inf")):
+            raise DoodleError(f"{name} must be a positive number, not {value:g}")
+    if not args.threshold >= 0:
+        raise DoodleError(f"--threshold must be 0 or more, not {args.threshold:g}")
+    if args.time or args.weight:
+        qualities.setdefault((None, None), (args.time, args.weight))
+    effort_model = None
+    if not args.no_effort:
+        from laban.models import load as load_effort_model
+
+        effort_model = load_effort_model(args.effort_model)
+    results = compile_doodle(doodle, args.library, not args.no_builtin, params, args.fps, args.scale, args.threshold,
+                             not args.no_foot_pinning, terrain, args.jump_arc, args.retime, qualities, args.style,
+                             effort_model, progress_bar("segments"))
+    out = Path(args.output)
+    out.mkdir(parents=True, exist_ok=True)
+    paths = {r.track: out / f"{r.track}.bvh" for r in results}
+    for r in results:
+        write_bvh(paths[r.track], r.motion)
+    report = compiled_report(args.file, args.fps, args.terrain, results, paths, {r.track: quality(r) for r in results})
+    if args.preview:
+        from retarget.preview import keyframes, plan_view
+
+        from doodle.app.cli.render import preview_sheet
+
+        report["preview"] = [str(plan_view(results, {r.track: r.projected for r in results}, out / "plan.png")),
+                             str(keyframes(results, out / "keyframes.png"))]
+        sheet = preview_sheet(results, terrain, out / "render.png", args.fps)
+        if sheet is not None:
+            report["preview"].append(str(sheet))
+    atomic_write(out / "report.json", [json.dumps(report, indent=2) + "\n"])
+    for name, tr in report["tracks"].items():
+        m = tr["metrics"]
+        print(f"{tr['bvh']}: {tr['frames']} frames at {args.fps:g} fps; "
+              f"{', '.join(s['action'] for s in tr['segments'])}")
+        print(f"  foot skating {m['foot_skating_m_per_s']} m/s, ground penetration {m['ground_penetration_m']} m, "
+              f"root deviation {m['root_deviation_m']} m, transition smoothness {m['transition_smoothness']}")
+    print(f"{out / 'report.json'}" + (f"; preview: {', '.join(report['preview'])}" if args.preview else ""))
+    return 0

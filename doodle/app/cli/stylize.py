@@ -1,0 +1,60 @@
+"""``doodle stylize``: Laban Time and Weight applied to a BVH clip."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from doodle.core.errors import DoodleError
+
+
+def add_parser(sub) -> None:
+    p = sub.add_parser("stylize", help="apply Laban Time and Weight to a BVH clip")
+    p.add_argument("clip", metavar="CLIP.bvh")
+    p.add_argument("--time", type=float, default=0.0, help="L_t in [-1, 1]: sustained < 0 < sudden")
+    p.add_argument("--weight", type=float, default=0.0, help="L_w in [-1, 1]: light < 0 < strong")
+    p.add_argument("--stages", metavar="P,A,E,F", help="frames ending preparation, anticipation, execution, "
+                   "follow-through (default: extracted)")
+    p.add_argument("-o", "--output", required=True, metavar="OUT.bvh")
+    p.add_argument("--compare", metavar="PNG", help="neutral and stylised side by side, with end-effector paths")
+    p.add_argument("--cyclic", action="store_true",
+                   help="a cycle (a walk): Weight as upper-body swing and posture only, no retiming; Time ignored")
+    p.set_defaults(run=cmd_stylize)
+
+
+def cmd_stylize(args) -> int:
+    from retarget.analysis import Stages, guess_roles, stages
+    from retarget.bvh import read_bvh_with_unit, write_bvh
+    from retarget.stylize import stylize
+
+    for name, value in (("--time", args.time), ("--weight", args.weight)):
+        if not -1.0 <= value <= 1.0:
+            raise DoodleError(f"{name} must be between -1 and 1, not {value:g}")
+    motion, unit = read_bvh_with_unit(args.clip)
+    if args.stages:
+        try:
+            ends = [int(x) for x in args.stages.split(",")]
+        except ValueError:
+            raise DoodleError(f"--stages: expected four frame numbers like 8,16,24,32, not {args.stages!r}") from None
+        if len(ends) != 4 or ends != sorted(ends) or ends[-1] > motion.frames:
+            raise DoodleError(f"--stages: four increasing frame numbers within the clip's {motion.frames} frames")
+        found = Stages(*ends, motion.frames)
+    else:
+        found = stages(motion)
+    if args.cyclic:
+        from retarget.stylize import cyclic
+
+        out = cyclic(motion, args.weight)
+    else:
+        out = stylize(motion, found, args.time, args.weight)
+    Path(args.output).parent.mkdir(parents=True, exist_ok=True)
+    write_bvh(args.output, out, unit=unit)
+    print(f"{args.output}: {out.frames} frames at {out.fps:.4g} fps ({out.duration:.2f} s; neutral "
+          f"{motion.duration:.2f} s), time {args.time:+g}, weight {args.weight:+g}; stages "
+          f"{found.preparation},{found.anticipation},{found.execution},{found.follow_through}")
+    if args.compare:
+        from retarget.preview import compare_picture
+
+        roles = guess_roles(motion.skeleton)
+        effectors = [roles[k] for k in ("right_hand", "left_hand", "right_foot", "left_foot") if k in roles]
+        print(compare_picture(motion, out, effectors, args.compare, f"time {args.time:+g}, weight {args.weight:+g}"))
+    return 0

@@ -1,0 +1,72 @@
+"""What the CLI reports, in one place: ``report.json`` of ``doodle compile`` and the segments
+of ``doodle recognize --json`` (their shapes are tested in ``tests/test_report.py``).
+
+Times are seconds from the first sample; a segment is ``{track?, index?, action, start, end,
+exact, distance, interaction, role, …, tokens}`` where ``interaction`` and ``role`` are null
+unless the segment plays a role in an interaction, and a refused action carries
+``refused`` and ``reason``.
+"""
+
+from __future__ import annotations
+
+from grammar.contexter import InteractionSegment, Refused
+
+
+def seconds_of(doodle):
+    """Sample index → seconds from the first sample (an end index past the last sample
+    gives the last sample's time); ``doodle`` may also be an array of sample times."""
+    t = doodle.t if hasattr(doodle, "t") else doodle
+    last = len(t) - 1
+    return lambda i: round(float(t[min(i, last)] - t[0]), 6)
+
+
+def segment_entry(s, seconds, tokens) -> dict:
+    """One segment: its action, span, how it matched, its interaction role and tokens."""
+    role = (s.interaction, s.role) if isinstance(s, InteractionSegment) else (None, None)
+    entry = {"action": s.action, "start": seconds(s.start), "end": seconds(s.end), "exact": s.exact,
+             "distance": s.distance, "interaction": role[0], "role": role[1]}
+    if isinstance(s, Refused):
+        entry.update(refused=s.refused, reason=s.reason)
+    entry["samples"] = [s.start, s.end]
+    entry["tokens"] = [k.name for k in tokens[s.first:s.stop]]
+    return entry
+
+
+def recognized(path, doodle, result: dict) -> dict:
+    """``doodle recognize --json`` for one file: every track's segments in order."""
+    seconds = seconds_of(doodle)
+    return {"file": str(path),
+            "segments": [{"track": name, **segment_entry(s, seconds, toks)} for name, (toks, segs) in result.items()
+                         for s in segs]}
+
+
+def effort_entry(effort) -> dict | None:
+    """What the effort model said about a segment (None: given by the user, or not asked)."""
+    if effort is None:
+        return None
+    return {"time": effort.time, "weight": effort.weight, "p_sudden": round(effort.p_sudden, 3),
+            "p_strong": round(effort.p_strong, 3), "time_confidence": round(effort.time_confidence, 3),
+            "weight_confidence": round(effort.weight_confidence, 3), "drive": effort.drive, "state": effort.state}
+
+
+def compiled(file, fps: float, terrain: str | None, results: list, bvh_paths: dict, metrics: dict) -> dict:
+    """``report.json`` of ``doodle compile``: per track its BVH, segments (with the clip
+    used, the Laban quality applied and what the effort model said), transitions and
+    motion-quality metrics."""
+    report = {"file": str(file), "fps": fps,
+              "duration_s": round(float(results[0].sample_times[-1] - results[0].sample_times[0]), 6),
+              "terrain": terrain or "flat", "tracks": {}}
+    for r in results:
+        seconds = seconds_of(r.sample_times)  # the compiled timeline (placement may insert walks)
+        segments = []
+        for i, s in enumerate(r.segments):
+            entry = segment_entry(s, seconds, r.tokens)
+            del entry["samples"]
+            entry = {"index": i, **entry, "clip": r.clips.get(s.action), "time": r.styles[i][0],
+                     "weight": r.styles[i][1], "effort": effort_entry(r.efforts[i])}
+            entry["tokens"] = entry.pop("tokens")
+            segments.append(entry)
+        report["tracks"][r.track] = {"bvh": str(bvh_paths[r.track]), "frames": r.motion.frames, "segments": segments,
+                                     "transitions": [round(b, 6) for b in r.transitions],
+                                     "metrics": metrics[r.track]}
+    return report
