@@ -370,17 +370,18 @@ def test_placement_walks_in_and_back_with_time_inserted(tmp_path, capsys):
 
 
 def test_place_moves_turns_and_keeps_tracks_in_step():
-    from doodle.app.pipeline import _interaction_pairs, recognize
+    from doodle.app.placement import interaction_pairs
+    from grammar.recognizer import recognize
     from doodle.app.placement import place
 
     doodle = scene(["T_N_Z", "T_Z"], [], 0.3, q1=(0.0, 0.9239, 0.0, -0.3827))  # Pierrot turned 45° from her
     recognised = recognize(doodle, BUILTIN)
-    assert _interaction_pairs(recognised)
+    assert interaction_pairs(recognised)
     placed = place(doodle, recognised, 8.5, {"Slap": (0.0, 0.8, 180.0)})
     c0, c1 = placed.tracks
     assert len(c0.t) == len(c1.t) > len(doodle.t) and np.all(np.diff(c0.t) > 0) and np.array_equal(c0.t, c1.t)
     again = recognize(placed, BUILTIN)
-    (_, a, _, b), = _interaction_pairs(again)
+    (_, a, _, b), = interaction_pairs(again)
     i = b.start + 3
     assert np.linalg.norm((c1.p[i] - c0.p[i])[[0, 2]]) == pytest.approx(0.8 / 8.5, abs=0.01)
     assert ground_front(c1.q[i]) @ ground_front(c0.q[i]) == pytest.approx(-1.0, abs=0.02)  # face to face

@@ -14,9 +14,10 @@ from doodle.core import quat
 from doodle.core.errors import DoodleError
 from doodle.core.model import Doodle
 from doodle.input.segmenter import SegmenterParams
-from grammar.library import compile_library
+from grammar.library import Compiled, compile_library
+from doodle.app.placement import interaction_pairs
 from grammar.recognizer import recognize
-from library.manifest import load_library
+from library.manifest import builtin, combine, load_library
 
 
 # --- compile: actions → animation ------------------------------------------------------------
@@ -45,12 +46,51 @@ class Animation:
     sample_times: np.ndarray = None  # s: the doodle's sample times the segments index (walks inserted: longer)
 
 
+@dataclass(frozen=True)
+class Actions:
+    """The library a compile uses, loaded once: its definitions, the user part (whose
+    skeleton wins), the compiled expressions and the analysed clips."""
+
+    library: object  # library.manifest.Library
+    user: object  # the user library or None
+    compiled: Compiled
+    clips: dict  # action -> [retarget.clips.Clip]
+
+
+def load_for_compile(library_dir=None, use_builtin: bool = True) -> Actions:
+    from retarget.clips import load_clips
+
+    user = load_library(library_dir) if library_dir else None
+    if not use_builtin and user is None:
+        raise DoodleError("no actions to compile: the built-in library is left out and no user library is given")
+    library = combine(builtin() if use_builtin else None, user)
+    return Actions(library, user, compile_library(library), load_clips(library))
+
+
+@dataclass(frozen=True)
+class Choice:
+    """What one segment plays: the clip (stylised), the action's flags, the Laban quality
+    applied and what the effort model said."""
+
+    clip: object  # retarget.clips.Clip
+    action: object  # library.manifest.ActionDef
+    on_skeleton: bool  # a clip of its own (else the rest pose)
+    style: tuple  # (L_t, L_w) applied
+    effort: object  # laban.classify.Quality or None
+
+
 def compile_doodle(doodle: Doodle, library_dir=None, use_builtin: bool = True, params: SegmenterParams = SegmenterParams(),
                    fps: float = 30.0, scale: float | None = None, threshold: float = 2.0,
                    pin: bool = True, terrain=None, jump_arc: str = "clip", retime: str = "uniform",
                    qualities: dict | None = None, style: str = "modifiers", effort_model=None,
                    progress=None) -> list[Animation]:
     """Every track of a doodle turned into an animation on one timeline.
+
+    Stages: the library loaded once (:func:`load_for_compile`); the scene recognised and
+    its characters placed for their interactions (:func:`scene`); per track, a clip chosen
+    and stylised for each segment (:func:`choose`), the path laid on the terrain, the clips
+    sequenced with transitions, feet pinned and clamped (:func:`animate`); contacts between
+    characters reached (:func:`_contacts`).
 
     Feet are pinned in their contacts unless ``pin`` is False. ``qualities`` maps
     ``(track, segment index)`` — or ``(track, None)`` / ``(None, None)`` for every segment
@@ -60,110 +100,137 @@ def compile_doodle(doodle: Doodle, library_dir=None, use_builtin: bool = True, p
     :class:`laban.models.EffortModel`) recognises in the hand's motion, if one is given.
     ``progress(done, total)`` is called as segments are done (for a progress bar).
     """
-    from library.manifest import builtin as builtin_library
-    from library.manifest import combine
-    from retarget.clips import load_clips
-    from retarget.feet import clamp_to_ground, pin_feet
-    from retarget.sequence import Placed, sequence
-    from retarget.skeleton import forward_kinematics
-    from retarget.trajectory import Span, world_path
-
-    user = load_library(library_dir) if library_dir else None
-    if not use_builtin and user is None:
-        raise DoodleError("no actions to compile: the built-in library is left out and no user library is given")
-    library = combine(builtin_library() if use_builtin else None, user)
-    actions = compile_library(library)
-    clips = load_clips(library)
+    actions = load_for_compile(library_dir, use_builtin)
     scale = CHARACTER_HEIGHT / PROP_SIZE if scale is None else scale
-    results = []
-    recognised = recognize(doodle, actions, params, threshold)
-    placements = {i.name: i.placement if i.placement is not None else _pair_placement(i)
-                  for i in library.interactions if i.placement is not None or i.pair}
-    if placements:  # §6.2.2: walks to the interaction's configuration and back, time inserted
-        from doodle.app.placement import place
-
-        placed_doodle = place(doodle, recognised, scale, placements)
-        if placed_doodle is not doodle:
-            doodle = placed_doodle
-            recognised = recognize(doodle, actions, params, threshold)
-    met = meet(doodle, recognised, scale, skip=set(placements))
-    if met is not doodle:  # characters brought within reach: read the scene again
-        doodle = met
-        recognised = recognize(doodle, actions, params, threshold)
-    duration = float(doodle.t[-1])
-    times = np.arange(int(np.floor(duration * fps)) + 1) / fps
-    skeleton, rest = _compile_skeleton(library, user, clips)
+    doodle, recognised = scene(doodle, actions, params, threshold, scale)
+    times = np.arange(int(np.floor(float(doodle.t[-1]) * fps)) + 1) / fps
+    skeleton, rest = _compile_skeleton(actions.library, actions.user, actions.clips)
     total, done = sum(len(segs) for _, segs in recognised.values()), 0
     origin = doodle.tracks[0].p[0]  # one origin for the scene: characters keep their relative places
+    results = []
     for track in doodle.tracks:
         tokens, segments = recognised[track.name]
-        spans, placed, used = [], [], {}
-        styles, efforts = [], []
+        choices = []
         for index, seg in enumerate(segments):
+            choices.append(choose(seg, track, actions, skeleton, rest, _quality_of(qualities, track.name, index),
+                                  effort_model, style))
             if progress:
                 done += 1
                 progress(done, total)
-            on_skeleton = [c for c in clips.get(seg.action, []) if c.motion.skeleton.names == skeleton.names]
-            clip = on_skeleton[0] if on_skeleton else rest
-            name = seg.action if seg.action in library.names else "Idle"
-            action = library.action(name) if name in library.names else library.action(rest.action)
-            given = _quality_of(qualities, track.name, index)
-            effort = None
-            if given is None and effort_model is not None and seg.action != "unknown":
-                effort = effort_quality(effort_model, track, seg.start, seg.end)
-                given = (effort.time, effort.weight)
-            efforts.append(effort)
-            lt, lw = given or (0.0, 0.0)
-            if action.cyclic:
-                lt = 0.0  # a cycle's pace is the hand's travel: Time has nothing to retime
-            if (lt or lw) and on_skeleton:
-                clip = _stylized(clip, lt, lw, style, action.cyclic)
-            styles.append((lt, lw) if (lt or lw) and on_skeleton else (0.0, 0.0))
-            n = clip.motion.frames
-            b = clip.stages.bounds()
-            execution = (b["execution"][0] / max(n - 1, 1), b["execution"][1] / max(n - 1, 1))
-            hips = forward_kinematics(clip.motion)[0][:, clip.roles["pelvis"]][:, [0, 2]]
-            travel = hips[-1] - hips[0]
-            travels = not action.in_place and float(np.linalg.norm(travel)) > 0.2  # a walk, a jump
-            span = Span(seg.action, float(track.t[seg.start]), float(track.t[min(seg.end, len(track.t) - 1)]),
-                        seg.start, seg.end, action.in_place, action.jumping, action.cyclic, execution,
-                        float(np.arctan2(travel[0], travel[1])) if travels else 0.0)
-            spans.append(span)
-            placed.append((span, clip, travels))
-            used[seg.action] = clip.path if on_skeleton else None
-        front = quat.rotate(track.q[:1], np.array([[0.0, 0.0, 1.0]]))[0]  # the figurine's front at the start
-        path, heading = world_path(track.t, track.p, spans, scale, terrain, jump_arc, origin,
-                                   float(np.arctan2(front[0], front[2])))
-        frame_path = np.column_stack([np.interp(times, track.t, path[:, k]) for k in range(3)])
-        frame_heading = np.interp(times, track.t, heading)
-        pieces = []
-        step = np.linalg.norm(np.diff(frame_path[:, [0, 2]], axis=0), axis=1)
-        for span, clip, travels in placed:
-            cycles, progress = 0.0, None
-            if span.cyclic:
-                cycles = max((span.t1 - span.t0) / clip.motion.duration, 1.0)
-                if not span.in_place and clip.cycle_length:
-                    inside = (times[1:] > span.t0) & (times[1:] <= span.t1)
-                    progress = np.concatenate([[0.0], np.cumsum(np.where(inside, step, 0.0))])
-            pelvis = clip.roles["pelvis"]
-            by_hand = retime == "gesture" or (style == "preferred" and styles[len(pieces)] != (0.0, 0.0))
-            gesture = gesture_timing(track, span) if by_hand and not span.cyclic else None
-            pieces.append(Placed(span, clip.motion, pelvis, cycles, times, progress if travels else None, travels,
-                                 gesture=gesture))
-        pieces = _transition_points(pieces, [clip for _, clip, _ in placed])
-        motion, transitions = sequence(pieces, times, frame_path[:, [0, 2]], frame_heading, skeleton, fps,
-                                       ground_y=frame_path[:, 1])
-        if pin:
-            motion = pin_feet(motion, [rest.roles["left_foot"], rest.roles["right_foot"]], terrain=terrain)
-        motion = clamp_to_ground(motion, terrain)
-        ranges = [(int(np.searchsorted(times, sp.t0)), int(min(np.searchsorted(times, sp.t1), len(times) - 1)))
-                  for sp in spans]
-        projected = (track.p - origin) * scale
-        projected[:, 1] = 0.0 if terrain is None else terrain.height(projected[:, [0, 2]])
-        results.append(Animation(track.name, motion, segments, tokens, frame_path, transitions, used, rest.roles,
-                                terrain, ranges, projected, styles, efforts, track.t))
-    _contacts(results, recognised, {i.name: i for i in library.interactions})
+        results.append(animate(track, tokens, segments, choices, times, skeleton, rest, scale, terrain, origin,
+                               fps, jump_arc, retime, style, pin))
+    _contacts(results, recognised, {i.name: i for i in actions.library.interactions})
     return results
+
+
+def scene(doodle: Doodle, actions: Actions, params: SegmenterParams, threshold: float, scale: float):
+    """The doodle recognised, with its characters placed for their interactions (§6.2.2):
+    walks to an interaction's configuration and back inserted where the library gives one,
+    else the receiver stepping within reach. Placing changes the doodle, so it is read
+    again after each change. Returns (doodle, recognised)."""
+    recognised = recognize(doodle, actions.compiled, params, threshold)
+    placements = {i.name: i.placement if i.placement is not None else _pair_placement(i)
+                  for i in actions.library.interactions if i.placement is not None or i.pair}
+    if placements:
+        from doodle.app.placement import place
+
+        placed = place(doodle, recognised, scale, placements)
+        if placed is not doodle:
+            doodle = placed
+            recognised = recognize(doodle, actions.compiled, params, threshold)
+    met = meet(doodle, recognised, scale, skip=set(placements))
+    if met is not doodle:  # characters brought within reach: read the scene again
+        doodle = met
+        recognised = recognize(doodle, actions.compiled, params, threshold)
+    return doodle, recognised
+
+
+def choose(seg, track, actions: Actions, skeleton, rest, given, effort_model, style: str) -> Choice:
+    """The clip a segment plays on the output skeleton (the rest pose where its action has
+    none), stylised by the quality ``given`` or, without one, the one the effort model
+    recognises in the hand's motion (a cycle is never retimed: its pace is the hand's travel)."""
+    library = actions.library
+    on_skeleton = [c for c in actions.clips.get(seg.action, []) if c.motion.skeleton.names == skeleton.names]
+    clip = on_skeleton[0] if on_skeleton else rest
+    name = seg.action if seg.action in library.names else "Idle"
+    action = library.action(name) if name in library.names else library.action(rest.action)
+    effort = None
+    if given is None and effort_model is not None and seg.action != "unknown":
+        effort = effort_quality(effort_model, track, seg.start, seg.end)
+        given = (effort.time, effort.weight)
+    lt, lw = given or (0.0, 0.0)
+    if action.cyclic:
+        lt = 0.0
+    styled = bool((lt or lw) and on_skeleton)
+    if styled:
+        clip = _stylized(clip, lt, lw, style, action.cyclic)
+    return Choice(clip, action, bool(on_skeleton), (lt, lw) if styled else (0.0, 0.0), effort)
+
+
+def _span(seg, track, choice: Choice):
+    """The segment's place on the doodle's timeline with what the trajectory transfer needs
+    (flags, execution stage, the clip's own travel direction); and whether it travels."""
+    from retarget.skeleton import forward_kinematics
+    from retarget.trajectory import Span
+
+    clip, action = choice.clip, choice.action
+    n = clip.motion.frames
+    b = clip.stages.bounds()
+    execution = (b["execution"][0] / max(n - 1, 1), b["execution"][1] / max(n - 1, 1))
+    hips = forward_kinematics(clip.motion)[0][:, clip.roles["pelvis"]][:, [0, 2]]
+    travel = hips[-1] - hips[0]
+    travels = not action.in_place and float(np.linalg.norm(travel)) > 0.2  # a walk, a jump
+    span = Span(seg.action, float(track.t[seg.start]), float(track.t[min(seg.end, len(track.t) - 1)]),
+                seg.start, seg.end, action.in_place, action.jumping, action.cyclic, execution,
+                float(np.arctan2(travel[0], travel[1])) if travels else 0.0)
+    return span, travels
+
+
+def animate(track, tokens, segments, choices, times, skeleton, rest, scale, terrain, origin, fps, jump_arc,
+            retime, style, pin) -> Animation:
+    """One track's animation: the path laid on the terrain (§5.2), the chosen clips placed
+    on it and sequenced with transitions (§5.4), feet pinned in their contacts and clamped
+    to the ground."""
+    from retarget.feet import clamp_to_ground, pin_feet
+    from retarget.sequence import Placed, sequence
+    from retarget.trajectory import world_path
+
+    placed = [(*_span(seg, track, c), c) for seg, c in zip(segments, choices)]
+    spans = [span for span, _, _ in placed]
+    front = quat.rotate(track.q[:1], np.array([[0.0, 0.0, 1.0]]))[0]  # the figurine's front at the start
+    path, heading = world_path(track.t, track.p, spans, scale, terrain, jump_arc, origin,
+                               float(np.arctan2(front[0], front[2])))
+    frame_path = np.column_stack([np.interp(times, track.t, path[:, k]) for k in range(3)])
+    frame_heading = np.interp(times, track.t, heading)
+    step = np.linalg.norm(np.diff(frame_path[:, [0, 2]], axis=0), axis=1)
+    pieces = []
+    for span, travels, choice in placed:
+        clip = choice.clip
+        cycles, progress = 0.0, None
+        if span.cyclic:
+            cycles = max((span.t1 - span.t0) / clip.motion.duration, 1.0)
+            if not span.in_place and clip.cycle_length:
+                inside = (times[1:] > span.t0) & (times[1:] <= span.t1)
+                progress = np.concatenate([[0.0], np.cumsum(np.where(inside, step, 0.0))])
+        by_hand = retime == "gesture" or (style == "preferred" and choice.style != (0.0, 0.0))
+        gesture = gesture_timing(track, span) if by_hand and not span.cyclic else None
+        pieces.append(Placed(span, clip.motion, clip.roles["pelvis"], cycles, times, progress if travels else None,
+                             travels, gesture=gesture))
+    pieces = _transition_points(pieces, [c.clip for c in choices])
+    motion, transitions = sequence(pieces, times, frame_path[:, [0, 2]], frame_heading, skeleton, fps,
+                                   ground_y=frame_path[:, 1])
+    if pin:
+        motion = pin_feet(motion, [rest.roles["left_foot"], rest.roles["right_foot"]], terrain=terrain)
+    motion = clamp_to_ground(motion, terrain)
+    ranges = [(int(np.searchsorted(times, sp.t0)), int(min(np.searchsorted(times, sp.t1), len(times) - 1)))
+              for sp in spans]
+    projected = (track.p - origin) * scale
+    projected[:, 1] = 0.0 if terrain is None else terrain.height(projected[:, [0, 2]])
+    used = {seg.action: (c.clip.path if c.on_skeleton else None) for seg, c in zip(segments, choices)}
+    return Animation(track=track.name, motion=motion, segments=segments, tokens=tokens, path=frame_path,
+                     transitions=transitions, clips=used, roles=rest.roles, terrain=terrain, frame_ranges=ranges,
+                     projected=projected, styles=[c.style for c in choices], efforts=[c.effort for c in choices],
+                     sample_times=track.t)
 
 
 def _pair_placement(interaction) -> tuple[float, float, float]:
@@ -186,20 +253,6 @@ HEAD_RADIUS = 0.09  # m: the hand meets the head's surface, not its centre
 MEET_S = 0.8  # s: the receiver steps in over this long before the interaction
 
 
-def _interaction_pairs(recognised: dict) -> list[tuple[str, object, str, object]]:
-    """(track of role 0, its segment, track of role 1, its segment) of each recognised
-    two-character interaction."""
-    firsts = [(tr, s) for tr, (_, segs) in recognised.items() for s in segs if getattr(s, "role", None) == 0]
-    seconds = [(tr, s) for tr, (_, segs) in recognised.items() for s in segs if getattr(s, "role", None) == 1]
-    pairs = []
-    for ta, a in firsts:
-        for tb, b in seconds:
-            if tb != ta and b.interaction == a.interaction and b.start < a.end and a.start < b.end:
-                pairs.append((ta, a, tb, b))
-                break
-    return pairs
-
-
 def meet(doodle: Doodle, recognised: dict, scale: float, skip=frozenset()) -> Doodle:
     """Interaction placement (§6.2.2, simplified): for each recognised two-character
     interaction whose characters stand farther apart than a hand's reach, the second
@@ -210,7 +263,7 @@ def meet(doodle: Doodle, recognised: dict, scale: float, skip=frozenset()) -> Do
 
     tracks = {tr.name: tr for tr in doodle.tracks}
     changed = False
-    for ta, a, tb, b in _interaction_pairs(recognised):
+    for ta, a, tb, b in interaction_pairs(recognised):
         if a.interaction in skip:  # placed by its own configuration (doodle.app.placement)
             continue
         A, B = tracks[ta], tracks[tb]
@@ -237,7 +290,7 @@ def _contacts(results: list, recognised: dict, interactions: dict) -> None:
     from retarget.skeleton import forward_kinematics
 
     by_track = {r.track: k for k, r in enumerate(results)}
-    for ta, a, tb, b in _interaction_pairs(recognised):
+    for ta, a, tb, b in interaction_pairs(recognised):
         contact = interactions.get(a.interaction).contact if a.interaction in interactions else ()
         if not contact or not contact[0].endswith("_hand"):
             continue

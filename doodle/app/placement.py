@@ -24,6 +24,7 @@ from scipy.spatial.transform import Rotation, Slerp
 
 from doodle.core.model import Doodle, Track
 from doodle.core.profiles import min_jerk
+from grammar.contexter import InteractionSegment
 
 WALK_SPEED = 1.0  # m/s in character space: an unhurried walk
 MIN_WALK_S = 0.5  # s: the shortest inserted walk
@@ -31,15 +32,27 @@ MIN_SHIFT = 0.05  # m in character space: closer than this, no walk is needed
 UP = np.array([0.0, 1.0, 0.0])
 
 
+def interaction_pairs(recognised: dict) -> list[tuple[str, object, str, object]]:
+    """(track of role 0, its segment, track of role 1, its segment) of each recognised
+    two-character interaction."""
+    roles = [(tr, s) for tr, (_, segs) in recognised.items() for s in segs if isinstance(s, InteractionSegment)]
+    pairs = []
+    for ta, a in (r for r in roles if r[1].role == 0):
+        for tb, b in (r for r in roles if r[1].role == 1):
+            if tb != ta and b.interaction == a.interaction and b.start < a.end and a.start < b.end:
+                pairs.append((ta, a, tb, b))
+                break
+    return pairs
+
+
 def place(doodle: Doodle, recognised: dict, scale: float, placements: dict) -> Doodle:
     """The doodle with each recognised two-character interaction that has a placement
     (``{interaction: (x, z, turn)}``) played at it: walks there and back inserted, time
-    inserted into every track. ``recognised`` is :func:`doodle.app.pipeline.recognize`'s
+    inserted into every track. ``recognised`` is :func:`grammar.recognizer.recognize`'s
     result; ``scale`` character metres per doodle metre. Interactions are placed from the
     last to the first, so the earlier ones' samples do not move."""
-    from doodle.app.pipeline import _interaction_pairs
 
-    pairs = [p for p in _interaction_pairs(recognised) if p[1].interaction in placements]
+    pairs = [p for p in interaction_pairs(recognised) if p[1].interaction in placements]
     for ta, a, tb, b in sorted(pairs, key=lambda p: -doodle.track(p[2]).t[min(p[3].start, len(doodle.t) - 1)]):
         doodle = _place_one(doodle, ta, a, tb, b, scale, placements[a.interaction])
     return doodle
