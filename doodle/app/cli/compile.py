@@ -26,7 +26,7 @@ def add_parser(sub) -> None:
     p.add_argument("--preview", action="store_true", help="also draw plan.png (paths) and keyframes.png (poses)")
     p.add_argument("--time", type=float, default=0.0, help="Laban Time for every segment: sustained -1 … sudden 1")
     p.add_argument("--weight", type=float, default=0.0, help="Laban Weight for every segment: light -1 … strong 1")
-    p.add_argument("--edits", metavar="FILE.json", help="per-segment time and weight (see README)")
+    p.add_argument("--edits", metavar="FILE.json", help="per-segment time and weight (see docs/cli.md)")
     p.add_argument("--effort-model", metavar="MODEL.npz",
                    help="Laban Effort model for segments without a given quality (default: the shipped one)")
     p.add_argument("--no-effort", action="store_true", help="do not recognise Time and Weight: neutral unless given")
