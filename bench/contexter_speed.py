@@ -1,4 +1,4 @@
-"""Contexter cost (issue 10): interactions recognised across 2 and 4 tracks, per frame of
+"""Contexter cost: interactions recognised across 2 and 4 tracks, per frame of
 the doodle, beside the per-track recognition it runs after (Segmenter + Matcher, batch); and
 streamed as `doodle replay` runs it (the live Contexter), per frame, beside replay without it."""
 

@@ -1,4 +1,4 @@
-"""Offscreen rendering (issue 9): milliseconds per 640×480 frame of the compiled demo scene
+"""Offscreen rendering: milliseconds per 640×480 frame of the compiled demo scene
 (pyrender, EGL, CPU rasteriser here), and the first frame, which also sets the scene up."""
 
 import time

@@ -1,4 +1,4 @@
-"""Live recognition cost during replay (issue 9): processing time per 90 Hz frame for two
+"""Live recognition cost during replay: processing time per 90 Hz frame for two
 tracks (streaming Segmenter + Matcher), p50 and p99 (target p99 ≤ 1 ms), beside the
 Segmenter alone in the same run; and how long after a gesture ends it is recognised."""
 

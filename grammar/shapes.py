@@ -9,7 +9,7 @@ its :data:`POINTS` − 1 steps (in the room's frame — a performer faces the ta
 and right mean something). The shape distance of a performance to an action is the smallest
 DTW cost between its directions and an example's, per step (the mean squared difference of
 unit directions, 0 … 4). It is the representation of the nearest-neighbour baseline of
-issue 8 (Kristensson & Zhai's direction features resampled by arc length, compared with
+the learning benchmark (Kristensson & Zhai's direction features resampled by arc length, compared with
 DTW); here it ranks the actions whose expressions the Matcher found: ``edits +``
 :data:`WEIGHT` ``× shape distance``.
 

@@ -281,7 +281,7 @@ def combine(base: Library | None, user: Library | None) -> Library:
     if base is None or user is None:
         lib = base or user
         if lib is None:
-            raise DoodleError("no library: give --library DIR or drop --no-builtin")
+            raise DoodleError("no library: neither the built-in one nor a user library")
         return lib
     mine = {a.name: a for a in user.actions}
     merged = []

@@ -1,4 +1,4 @@
-"""`doodle compile`, first version: flat ground, built-in clips, one BVH per track."""
+"""`doodle compile`: flat ground, built-in clips, one BVH per track."""
 
 import json
 import sys

@@ -126,6 +126,27 @@ def test_streaming_refiner_equals_batch(tmp_path):
         assert any(a in path for _, a, _ in expected)
 
 
+def test_live_recording_reads_learned_shapes_as_recognize_does(tmp_path):
+    """``doodle record`` goes through the one Recognizer: a learned gesture replayed through
+    the recording loop is recognised live as ``doodle recognize`` reads the file it wrote."""
+    from doodle.app.recorder import record
+    from doodle.input.loader import load
+    from doodle.input.sources import SyntheticSource
+    from grammar.recognizer import load_actions, recognize
+
+    lib, files = _learn_all(tmp_path, ["hook_left", "golf_swing"])
+    compiled = load_actions(lib, False)
+    doodle = load(files["hook_left"][3], convention="unity")
+    now = [0.0]
+    result = record(SyntheticSource(doodle), tmp_path / "live.doodle", clock=lambda: now[0],
+                    sleep=lambda s: now.__setitem__(0, now[0] + max(s, 0.0)), compiled=compiled)
+    on_file = recognize(load(result.path), compiled)
+    want = [s.action for s in on_file["c0"][1] if s.action != "unknown"]
+    assert "hook_left" in want
+    assert [a for a, _, _ in result.actions["c0"]] == want
+    assert [s.action for s in result.recognised["c0"][1]] == [s.action for s in on_file["c0"][1]]
+
+
 def test_manifest_shape_and_track_fields(tmp_path):
     from library.manifest import format_library, load_library
 

@@ -73,7 +73,7 @@ def execution_jerk(motion, joint, st):
 # The strikes and other one-shots with an impulsive execution. Gentle clips (Raise Arms,
 # Pick up, Greet, Despair, Kiss, Dance, Uppercut Jab…) keep Sudden's signature but not
 # Sustained's: eq. 5.3 plays Sustained anticipation twice as fast and starts the execution
-# fast then decelerates, which raises their (tiny) execution jerk — see issue 6's note.
+# fast then decelerates, which raises their (tiny) execution jerk.
 IMPULSIVE = ["Punch", "Kick", "Throw", "Stomp", "Crescent Kick", "Block", "Jump", "Flip", "Duck", "Stop",
              "Dodge", "Cast Fireball", "Yell", "Slap"]
 

@@ -32,12 +32,12 @@ def load(path, convention: str | None = None, columns: dict | None = None,
     if path.suffix.lower() == ".csv":
         if convention is None:
             raise DoodleError(
-                f"{path}: a CSV file does not say its coordinate convention; pass --convention unity, openvr or doodle"
+                f"{path}: a CSV file does not say its coordinate convention; name it: unity, openvr or doodle"
             )
         doodle = read_csv(path, convention=convention, columns=columns)
     else:
         if convention is not None:
-            raise DoodleError(f"{path}: --convention applies to CSV input; a doodle file's header names its own")
+            raise DoodleError(f"{path}: a doodle file's header names its own convention; one is given only for CSV input")
         doodle = read_doodle(path)
     doodle = doodle.select(tracks)
     if raw:

@@ -50,6 +50,14 @@ def load_input(path, args, mounts, raw=False):
     from doodle.input.csvimport import parse_column_map
     from doodle.input.loader import load
 
+    from pathlib import Path
+
+    is_csv = Path(path).suffix.lower() == ".csv"
+    if is_csv and args.convention is None and Path(path).is_file():
+        raise DoodleError(f"{path}: a CSV file does not say its coordinate convention; pass --convention unity, "
+                          "openvr or doodle")
+    if not is_csv and args.convention is not None and Path(path).is_file():
+        raise DoodleError(f"{path}: --convention applies to CSV input; a doodle file's header names its own")
     columns = parse_column_map(args.columns) if args.columns else None
     tracks = [t.strip() for t in args.tracks.split(",") if t.strip()] if args.tracks else None
     return load(path, args.convention, columns, tracks, mounts, raw)
