@@ -2,7 +2,7 @@
 
 import sys
 
-from bench import (bvh_speed, contexter_speed, laban_effort, learning, matcher_speed, performers, real_gestures,
+from bench import (animation_check, bvh_speed, contexter_speed, laban_effort, learning, matcher_speed, performers, real_gestures,
                    render_speed, replay_latency, segmenter_speed, stages_accuracy, stylize_speed, terrain_speed)
 
 
@@ -33,6 +33,8 @@ def main() -> int:
     render_speed.main()
     print()
     contexter_speed.main()
+    print()
+    animation_check.main()
     return 0
 
 

@@ -10,7 +10,7 @@ from bench.timing import best_of
 from grammar.recognizer import load_actions, recognize, track_automata
 from doodle.app.replay import replay
 from doodle.synth.strokes import stroke, synth_doodle
-from grammar.contexter import with_interactions
+from grammar.contexter import InteractionSegment, with_interactions
 
 FACING, BACK = (0.0, 0.0, 0.0, 1.0), (0.0, 1.0, 0.0, 0.0)
 
@@ -45,7 +45,7 @@ def main() -> None:
         best = best_of(lambda: with_interactions(doodle, compiled, recognised))
         result = with_interactions(doodle, compiled, recognised)
         frames = len(doodle.t)
-        found = sum(1 for segs in result.values() for s in segs if getattr(s, "interaction", None)) // 2
+        found = sum(1 for segs in result.values() for s in segs if isinstance(s, InteractionSegment)) // 2
         print(f"  {tracks} tracks, {doodle.t[-1]:.0f} s ({frames} frames): {found} interactions; "
               f"Contexter {best / frames * 1e6:.1f} µs per frame   (baseline, per-track recognition "
               f"{base / frames * 1e6:.1f} µs per frame)")

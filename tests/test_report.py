@@ -33,7 +33,8 @@ def test_compile_report_shape(tmp_path, capsys):
     report = json.loads((out / "report.json").read_text())
     assert set(report) == {"file", "fps", "duration_s", "terrain", "tracks"}
     track = report["tracks"]["c0"]
-    assert set(track) == {"bvh", "frames", "segments", "transitions", "metrics"}
+    assert set(track) == {"bvh", "frames", "segments", "transitions", "metrics", "check"}
+    assert isinstance(track["check"]["passes"], bool) and isinstance(track["check"]["sliding_frames"], list)
     assert Path(track["bvh"]).exists() and track["frames"] > 0
     assert set(track["metrics"]) >= {"foot_skating_m_per_s", "ground_penetration_m", "root_deviation_m",
                                      "transition_smoothness"}

@@ -49,10 +49,11 @@ def effort_entry(effort) -> dict | None:
             "weight_confidence": round(effort.weight_confidence, 3), "drive": effort.drive, "state": effort.state}
 
 
-def compiled(file, fps: float, terrain: str | None, results: list, bvh_paths: dict, metrics: dict) -> dict:
+def compiled(file, fps: float, terrain: str | None, results: list, bvh_paths: dict, metrics: dict,
+             checks: dict | None = None) -> dict:
     """``report.json`` of ``doodle compile``: per track its BVH, segments (with the clip
-    used, the Laban quality applied and what the effort model said), transitions and
-    motion-quality metrics."""
+    used, the Laban quality applied and what the effort model said), transitions,
+    motion-quality metrics and the animation check (:mod:`retarget.qa`)."""
     report = {"file": str(file), "fps": fps,
               "duration_s": round(float(results[0].sample_times[-1] - results[0].sample_times[0]), 6),
               "terrain": terrain or "flat", "tracks": {}}
@@ -69,4 +70,6 @@ def compiled(file, fps: float, terrain: str | None, results: list, bvh_paths: di
         report["tracks"][r.track] = {"bvh": str(bvh_paths[r.track]), "frames": r.motion.frames, "segments": segments,
                                      "transitions": [round(b, 6) for b in r.transitions],
                                      "metrics": metrics[r.track]}
+        if checks is not None:
+            report["tracks"][r.track]["check"] = checks[r.track].figures()
     return report

@@ -44,6 +44,7 @@ def cmd_compile(args) -> int:
     from doodle.app.pipeline import compile_doodle, quality
     from doodle.app.report import compiled as compiled_report
     from retarget.bvh import write_bvh
+    from retarget.qa import check_scene
 
     from retarget.terrain import parse_terrain
 
@@ -76,7 +77,9 @@ def cmd_compile(args) -> int:
     paths = {r.track: out / f"{r.track}.bvh" for r in results}
     for r in results:
         write_bvh(paths[r.track], r.motion)
-    report = compiled_report(args.file, args.fps, args.terrain, results, paths, {r.track: quality(r) for r in results})
+    checks = check_scene({r.track: r.motion for r in results}, terrain)
+    report = compiled_report(args.file, args.fps, args.terrain, results, paths, {r.track: quality(r) for r in results},
+                             checks)
     if args.preview:
         from retarget.preview import keyframes, plan_view
 
@@ -92,7 +95,8 @@ def cmd_compile(args) -> int:
         m = tr["metrics"]
         print(f"{tr['bvh']}: {tr['frames']} frames at {args.fps:g} fps; "
               f"{', '.join(s['action'] for s in tr['segments'])}")
-        print(f"  foot skating {m['foot_skating_m_per_s']} m/s, ground penetration {m['ground_penetration_m']} m, "
-              f"root deviation {m['root_deviation_m']} m, transition smoothness {m['transition_smoothness']}")
+        print(f"  check: {checks[name].summary()}")
+        print(f"  ground penetration {m['ground_penetration_m']} m, root deviation {m['root_deviation_m']} m, "
+              f"transition smoothness {m['transition_smoothness']}")
     print(f"{out / 'report.json'}" + (f"; preview: {', '.join(report['preview'])}" if args.preview else ""))
     return 0

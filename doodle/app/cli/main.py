@@ -19,12 +19,12 @@ EXIT_USAGE = 2
 
 
 def build_parser() -> argparse.ArgumentParser:
-    from doodle.app.cli import compile, inputs, laban, learn, library, recognize, record, render, replay, stylize
+    from doodle.app.cli import compile, inputs, laban, learn, library, qa, recognize, record, render, replay, stylize
 
     parser = argparse.ArgumentParser(prog="doodle", description="Spatial motion doodles: VR controller motion to character animation.")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     inputs.add_tokens_parser(sub)
-    for command in (recognize, compile, stylize, library, record, render, laban, learn, replay, inputs):
+    for command in (recognize, compile, qa, stylize, library, record, render, laban, learn, replay, inputs):
         command.add_parser(sub)
     return parser
 
