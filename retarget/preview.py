@@ -61,11 +61,14 @@ def plan_view(results, projected: dict, path) -> Path:
 
 
 def keyframes(results, path) -> Path:
-    """The character at the middle of each segment, one row per track."""
+    """The character at the middle of each segment — a grid, rows of six per track, each
+    cell titled with the segment's action and time."""
     path = Path(path)
     motions = {r.track: r.motion for r in results}
     frames = {r.track: [int((a + b) // 2) for a, b in r.frame_ranges] for r in results}
-    atomic_png(path, lambda name: contact_sheet(motions, name, frames=frames))
+    labels = {r.track: [f"{s.action} {f * r.motion.frame_time:.2f} s" for s, f in zip(r.segments, frames[r.track])]
+              for r in results}
+    atomic_png(path, lambda name: contact_sheet(motions, name, frames=frames, labels=labels, wrap=6))
     return path
 
 

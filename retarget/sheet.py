@@ -32,26 +32,35 @@ def _side(name: str) -> str:
 
 
 def contact_sheet(motions: dict, path, frames_per_clip: int = 6, frames: dict | None = None,
-                  views: tuple[str, ...] = ("side", "front"), cell: float = 1.3) -> Path:
-    """Render the clips of ``motions`` (name → Motion) as a grid PNG at ``path``."""
+                  views: tuple[str, ...] = ("side", "front"), cell: float = 1.3, labels: dict | None = None,
+                  wrap: int | None = None) -> Path:
+    """Render the clips of ``motions`` (name → Motion) as a grid PNG at ``path``: a row of
+    cells per clip (``wrap`` cells a row at most, continuing on the next), each titled with
+    its frame number or its ``labels[name][k]``."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    names = list(motions)
-    cols = max(frames_per_clip, max((len(v) for v in (frames or {}).values()), default=0))
+    rows = []  # (name, frames of the row, their titles)
+    for name, m in motions.items():
+        picks = list((frames or {}).get(name) or np.linspace(0, m.frames - 1, frames_per_clip).round().astype(int))
+        picks = [min(max(int(f), 0), m.frames - 1) for f in picks]
+        titles = list((labels or {}).get(name) or [str(f) for f in picks])
+        step = wrap or max(len(picks), 1)
+        for k in range(0, max(len(picks), 1), step):
+            rows.append((name if k == 0 else "", name, picks[k:k + step], titles[k:k + step]))
+    cols = max(frames_per_clip if not frames else 0, max((len(r[2]) for r in rows), default=0))
     nv = len(views)
-    fig, axes = plt.subplots(len(names), cols * nv, figsize=(cols * nv * cell * 0.75, len(names) * cell),
+    tall = 1.25 if labels else 1.0
+    fig, axes = plt.subplots(len(rows), cols * nv, figsize=(cols * nv * cell * 0.75, len(rows) * cell * tall),
                              squeeze=False)
-    for r, name in enumerate(names):
+    for r, (shown, name, picks, titles) in enumerate(rows):
         m: Motion = motions[name]
         world = forward_kinematics(m)
         pos = world[0]
         ends = end_site_positions(m, world)
         sk = m.skeleton
         top = max(1.95, max([pos[..., 1].max()] + [e[:, 1].max() for e in ends.values()]) + 0.08)
-        picks = list((frames or {}).get(name) or np.linspace(0, m.frames - 1, frames_per_clip).round().astype(int))
-        picks = [min(max(int(f), 0), m.frames - 1) for f in picks]
         for c in range(cols):
             for k, view in enumerate(views):
                 ax = axes[r, c * nv + k]
@@ -82,8 +91,8 @@ def contact_sheet(motions: dict, path, frames_per_clip: int = 6, frames: dict | 
                 ax.set_xlim(-1.0, 1.0); ax.set_ylim(-0.05, top)
                 ax.set_aspect("equal")
                 if k == 0:
-                    ax.set_title(f"{f}", fontsize=6, pad=1)
-        axes[r, 0].set_ylabel(name, fontsize=8, rotation=0, ha="right", va="center")
+                    ax.set_title(titles[c], fontsize=7 if labels else 6, pad=1, loc="left" if labels else "center")
+        axes[r, 0].set_ylabel(shown, fontsize=8, rotation=0, ha="right", va="center")
     fig.subplots_adjust(left=0.09, right=0.995, top=0.995, bottom=0.005, wspace=0.02, hspace=0.12)
     path = Path(path)
     fig.savefig(path, dpi=90)
