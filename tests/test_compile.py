@@ -202,3 +202,26 @@ def test_bad_compile_options_are_one_line(tmp_path, capsys, flag, value):
     assert main(["compile", str(DEMO), "-o", str(tmp_path / "o"), flag, value]) == 1
     err = capsys.readouterr().err
     assert err.startswith("doodle: error:") and flag in err
+
+
+def test_a_library_without_a_clip_for_an_action_says_which_segments_hold_a_pose(tmp_path):
+    """A user library that misses an action: compile warns, naming the action and the
+    segments that hold the rest pose instead of moving."""
+    import warnings
+
+    from doodle.app.pipeline import compile_doodle
+    from doodle.input.loader import load
+    from retarget.importer import import_library
+
+    bandai = Path(__file__).resolve().parents[2] / "shared" / "data" / "mocap" / "bandai" / "dataset-1"
+    if not bandai.exists():
+        pytest.skip("../shared/data/mocap is not here")
+    import_library(bandai, "walks", tmp_path / "walks", None, "*_walk_normal_001*")
+    demo = load(Path(__file__).resolve().parents[1] / "examples" / "demo.doodle")
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        compile_doodle(demo, tmp_path / "walks")
+    said = [str(w.message) for w in caught if "no clip of" in str(w.message)]
+    assert any(s.startswith("the library has no clip of Jump on its skeleton: 1 segment holds the rest pose (c0 4.")
+               for s in said), said
+    assert not any("no clip of Walk " in s for s in said)

@@ -6,6 +6,7 @@ one animation per track (:func:`compile_doodle`), with quality metrics (:func:`q
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -107,7 +108,7 @@ def compile_doodle(doodle: Doodle, library_dir=None, use_builtin: bool = True, p
     skeleton, rest = _compile_skeleton(actions.library, actions.user, actions.clips)
     total, done = sum(len(segs) for _, segs in recognised.values()), 0
     origin = doodle.tracks[0].p[0]  # one origin for the scene: characters keep their relative places
-    results = []
+    results, missing = [], {}
     for track in doodle.tracks:
         tokens, segments = recognised[track.name]
         choices = []
@@ -119,6 +120,14 @@ def compile_doodle(doodle: Doodle, library_dir=None, use_builtin: bool = True, p
                 progress(done, total)
         results.append(animate(track, tokens, segments, choices, times, skeleton, rest, scale, terrain, origin,
                                fps, jump_arc, retime, style, pin))
+        for seg, c in zip(segments, choices):
+            if not c.on_skeleton and seg.action != "unknown":
+                missing.setdefault(seg.action, []).append(
+                    f"{track.name} {track.t[seg.start] - track.t[0]:.2f}–{track.t[min(seg.end, len(track.t) - 1)] - track.t[0]:.2f} s")
+    for action, where in missing.items():
+        warnings.warn(f"the library has no clip of {action} on its skeleton: {len(where)} segment"
+                      f"{'s' * (len(where) != 1)} hold{'s' * (len(where) == 1)} the rest pose ({', '.join(where[:4])}"
+                      f"{', …' if len(where) > 4 else ''})")
     _contacts(results, recognised, {i.name: i for i in actions.library.interactions})
     return results
 
