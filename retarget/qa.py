@@ -8,8 +8,8 @@ Each measure names the frames it happens in, so a failure can be looked at:
   its heel or toes is not sliding), flat for at least :attr:`Limits.stance` (a swinging foot
   skimming the floor is not standing on it); reported as frames per second of motion;
 * **pops** — any joint or end site moving faster than :attr:`Limits.pop` between two frames;
-* **one-frame turns** — the root's heading changing by more than :attr:`Limits.turn` in one
-  frame while the frames either side turn less than a quarter of that (a turn that is not
+* **one-frame turns** — the pelvis's heading changing by more than :attr:`Limits.turn` in one
+  frame while the frames either side turn less than a third of that (a turn that is not
   eased);
 * **hovering** — both feet's soles above the ground by more than :attr:`Limits.hover` for
   longer than :attr:`Limits.flight` (longer than any real jump's flight), and **sinking** —
@@ -41,7 +41,8 @@ class Limits:
     stance: float = 0.1  # s: ... for at least this long
     slides_per_s: float = 0.3  # sliding frames per second the check allows
     pop: float = 15.0  # m/s: no joint of a person moves faster
-    turn: float = 20.0  # degrees of heading in one frame, with the frames around it still
+    turn: float = 6.0  # degrees of heading in one frame (real walks turn ≤ 6.4° a frame), the frames around it
+    # turning under a third of that: a step, not a turn
     hover: float = 0.02  # m: soles above the ground ...
     flight: float = 0.8  # s: ... for longer than a real jump's flight
     sink: float = 0.01  # m below the ground
@@ -165,14 +166,14 @@ def check(motion: Motion, terrain=None, limits: Limits = Limits(), ground: float
     body_h = height(every).min(axis=1)
     sinking = np.flatnonzero(body_h < -limits.sink)
     return Check(motion.frames, motion.fps, tuple(np.flatnonzero(sliding)), tuple(pops),
-                 float(speeds.max()) if len(speeds) else 0.0, tuple(_one_frame_turns(rotations[:, 0], limits.turn)),
+                 float(speeds.max()) if len(speeds) else 0.0, tuple(_one_frame_turns(rotations[:, pelvis], limits.turn)),
                  tuple(np.flatnonzero(hovering)), float(lowest[hovering].max()) if hovering.any() else 0.0,
                  tuple(sinking), float(max(0.0, -body_h.min())), {}, limits)
 
 
 def _one_frame_turns(root_q: np.ndarray, limit_deg: float) -> list[int]:
     """Frames whose heading change exceeds the limit while both neighbouring frames turn
-    under a quarter of it."""
+    under a third of it."""
     from doodle.core import quat
 
     front = quat.rotate(root_q, np.tile([0.0, 0.0, 1.0], (len(root_q), 1)))
@@ -182,7 +183,7 @@ def _one_frame_turns(root_q: np.ndarray, limit_deg: float) -> list[int]:
     for k in range(len(step)):
         before = step[k - 1] if k > 0 else 0.0
         after = step[k + 1] if k + 1 < len(step) else 0.0
-        if step[k] > limit_deg and before < limit_deg / 4 and after < limit_deg / 4:
+        if step[k] > limit_deg and before < limit_deg / 3 and after < limit_deg / 3:
             out.append(k + 1)
     return out
 
