@@ -210,7 +210,7 @@ def animate(track, tokens, segments, choices, times, skeleton, rest, scale, terr
     path, heading = world_path(track.t, track.p, spans, scale, terrain, jump_arc, origin,
                                float(np.arctan2(front[0], front[2])))
     frame_path = np.column_stack([np.interp(times, track.t, path[:, k]) for k in range(3)])
-    frame_heading = np.interp(times, track.t, heading)
+    frame_heading = _eased(np.interp(times, track.t, np.unwrap(heading)), fps)
     step = np.linalg.norm(np.diff(frame_path[:, [0, 2]], axis=0), axis=1)
     pieces = []
     for span, travels, choice in placed:
@@ -240,6 +240,19 @@ def animate(track, tokens, segments, choices, times, skeleton, rest, scale, terr
                      transitions=transitions, clips=used, roles=rest.roles, terrain=terrain, frame_ranges=ranges,
                      projected=projected, styles=[c.style for c in choices], efforts=[c.effort for c in choices],
                      sample_times=track.t)
+
+
+TURN_EASE_S = 0.1  # s: the standard deviation of the Gaussian a heading's changes are eased over
+
+
+def _eased(heading: np.ndarray, fps: float) -> np.ndarray:
+    """The character's heading per frame with its changes eased over a few frames: where
+    the path's direction jumps (a walk starting from a standstill facing elsewhere) the
+    body turns over about half a second instead of in one frame."""
+    from scipy.ndimage import gaussian_filter1d
+
+    sigma = TURN_EASE_S * fps
+    return gaussian_filter1d(heading, sigma, mode="nearest") if sigma >= 0.5 and len(heading) > 1 else heading
 
 
 def _pair_placement(interaction) -> tuple[float, float, float]:
