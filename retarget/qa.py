@@ -11,8 +11,9 @@ Each measure names the frames it happens in, so a failure can be looked at:
 * **one-frame turns** — the pelvis's heading changing by more than :attr:`Limits.turn` in one
   frame while the frames either side turn less than a third of that (a turn that is not
   eased);
-* **hovering** — both feet's soles above the ground by more than :attr:`Limits.hover` for
-  longer than :attr:`Limits.flight` (longer than any real jump's flight), and **sinking** —
+* **hovering** — a foot held still for longer than :attr:`Limits.held` with its sole more
+  than :attr:`Limits.hover` above the ground, or both feet above it for longer than
+  :attr:`Limits.flight` (longer than any real jump's flight), and **sinking** —
   any point of the body below the ground by more than :attr:`Limits.sink`;
 * **interpenetration** — two characters' bodies, as capsules around their bones
   (:attr:`Limits.limb` radius, :attr:`Limits.trunk` for the spine), overlapping.
@@ -39,6 +40,8 @@ class Limits:
     slide: float = 0.3  # m/s: a flat foot moving faster slides
     flat: float = 0.01  # m: every point of a foot within this of its standing height: flat on the floor
     stance: float = 0.1  # s: ... for at least this long
+    still: float = 0.1  # m/s: a foot whose every point moves slower than this stands still ...
+    held: float = 0.5  # s: ... and one held still above the ground longer than this stands in the air
     slides_per_s: float = 0.3  # sliding frames per second the check allows
     pop: float = 15.0  # m/s: no joint of a person moves faster
     turn: float = 6.0  # degrees of heading in one frame (real walks turn ≤ 6.4° a frame), the frames around it
@@ -141,6 +144,7 @@ def check(motion: Motion, terrain=None, limits: Limits = Limits(), ground: float
     if terrain is None and ground is None and soles:
         ground = float(np.percentile(np.min([s[..., 1].min(axis=1) for s in soles], axis=0), 2))
     sliding = np.zeros(motion.frames, dtype=bool)
+    standing = np.zeros(motion.frames, dtype=bool)  # a foot standing still above the ground
     lowest = np.full(motion.frames, np.inf)
     for ankle, sole in zip(feet, soles):
         sole_h = height(sole).min(axis=1)
@@ -155,19 +159,27 @@ def check(motion: Motion, terrain=None, limits: Limits = Limits(), ground: float
         points = np.concatenate([positions[:, [ankle]], sole], axis=1)[:, :, [0, 2]]
         speed = np.linalg.norm(np.gradient(points, dt, axis=0), axis=2).min(axis=1)
         sliding |= flat & (speed > limits.slide)
+        # standing in the air: the foot still, every point of it, for longer than a foot is held up
+        # in the air by people (:attr:`Limits.held`) — but its sole above the ground
+        still = np.linalg.norm(np.gradient(points, dt, axis=0), axis=2).max(axis=1) <= limits.still
+        for a, b in _runs(still & (sole_h > limits.hover)):
+            if (b - a) * dt >= limits.held:
+                standing[a:b] = True
         lowest = np.minimum(lowest, sole_h)
     speeds = np.linalg.norm(np.diff(every, axis=0), axis=2).max(axis=1) / dt if motion.frames > 1 else np.zeros(0)
     pops = np.flatnonzero(speeds > limits.pop) + 1
-    hovering = np.zeros(motion.frames, dtype=bool)
+    hovering = standing.copy()
     if soles:
         for a, b in _runs(lowest > limits.hover):
             if (b - a) * dt > limits.flight:
                 hovering[a:b] = True
+    sole_top = np.max([height(sole).min(axis=1) for sole in soles], axis=0) if soles else lowest
     body_h = height(every).min(axis=1)
     sinking = np.flatnonzero(body_h < -limits.sink)
     return Check(motion.frames, motion.fps, tuple(np.flatnonzero(sliding)), tuple(pops),
                  float(speeds.max()) if len(speeds) else 0.0, tuple(_one_frame_turns(rotations[:, pelvis], limits.turn)),
-                 tuple(np.flatnonzero(hovering)), float(lowest[hovering].max()) if hovering.any() else 0.0,
+                 tuple(np.flatnonzero(hovering)),
+                 float(np.where(standing, sole_top, lowest)[hovering].max()) if hovering.any() else 0.0,
                  tuple(sinking), float(max(0.0, -body_h.min())), {}, limits)
 
 

@@ -100,3 +100,27 @@ def test_qa_passes_a_real_walk_and_refuses_what_is_not_a_scene(tmp_path, capsys)
     assert "passes" in capsys.readouterr().out
     assert main(["qa", str(tmp_path / "walk.bvh")]) == 1
     assert "not a folder" in capsys.readouterr().err
+
+
+@needs_mocap
+def test_a_foot_standing_still_above_a_step_down_hovers():
+    """A character standing still: over flat ground it passes; where the ground under one
+    foot drops 5 cm (that foot now stands in the air) it hovers."""
+    from retarget.analysis import guess_roles
+    from retarget.skeleton import forward_kinematics
+
+    clip = read_bvh(next(MOCAP.glob("dataset-2/*wave-both-hands_normal_001.bvh")))
+    left = forward_kinematics(clip)[0][0, guess_roles(clip.skeleton)["left_foot"]]
+    right = forward_kinematics(clip)[0][0, guess_roles(clip.skeleton)["right_foot"]]
+    floor = 0.0425
+    split = (left[0] + right[0]) / 2
+
+    class Step:
+        def height(self, xz):
+            xz = np.asarray(xz)
+            side = (xz[..., 0] - split) * np.sign(left[0] - right[0]) > 0
+            return np.where(side, floor - 0.05, floor)
+
+    assert not check(clip, ground=floor).hovering
+    stepped = check(clip, terrain=Step())
+    assert len(stepped.hovering) > 0.9 * clip.frames and stepped.highest > 0.045
