@@ -269,3 +269,19 @@ def test_bad_parameters_are_named():
         SegmenterParams(eps=float("nan"))
     with pytest.raises(DoodleError, match="smoothing"):
         SegmenterParams(smoothing="gauss")
+
+
+def test_a_quick_rounded_corner_keeps_its_diagonal():
+    """Up, then back, rounded in one quick movement: the hand crosses the up-back diagonal in
+    fewer than α samples, yet the diagonal is a token; a corner crossed in a single sample is
+    not (the streaming Segmenter agrees: the streaming-equals-batch tests above)."""
+    from doodle.core.tokens import CODES
+    from doodle.input.segmenter import debounce
+
+    up, diag, back = CODES["T_Y"], CODES["T_Y_N_Z"], CODES["T_N_Z"]
+    codes = np.array([up] * 8 + [diag] * 3 + [back] * 8)
+    assert [t.name for t in debounce(codes, 5)] == ["T_Y", "T_Y_N_Z", "T_N_Z"]
+    once = np.array([up] * 8 + [diag] + [back] * 8)
+    assert [t.name for t in debounce(once, 5)] == ["T_Y", "T_N_Z"]
+    same_axis = np.array([up] * 8 + [CODES["T_X_Y"]] * 3 + [up] * 8)  # a wobble, not a corner
+    assert [t.name for t in debounce(same_axis, 5)] == ["T_Y"]

@@ -39,7 +39,7 @@ from doodle.input.levelling import IDENTITY, level, levels, unrotate
 from doodle.core.model import Doodle, Track
 from doodle.input.repair import GapFiller, check_samples, fill_gaps
 from doodle.input.smoothing import StreamingSmoother, laplacian_kernel, savgol_kernel, smooth
-from doodle.core.tokens import NAMES, R_BASE, STILL, T_BASE, Token, direction_index, direction_indices
+from doodle.core.tokens import CODES, NAMES, R_BASE, STILL, T_BASE, Token, direction_index, direction_indices, signs_of
 
 
 @dataclass(frozen=True)
@@ -120,8 +120,52 @@ def sample_code(vel: tuple, theta2: float, eps2: float, c: tuple = IDENTITY) -> 
     return R_BASE + direction_index(*unrotate(*c, wx, wy, wz))
 
 
+def _corners() -> dict:
+    """(code a, code b) → the code of the diagonal between two single-axis translations on
+    different axes (``T_Y``, ``T_N_Z`` → ``T_Y_N_Z``)."""
+    out = {}
+    single = {}
+    for name, code in CODES.items():
+        kind, signs = signs_of(name)
+        if kind == "T" and sum(map(abs, signs)) == 1:
+            single[code] = signs
+    for a, sa in single.items():
+        for b, sb in single.items():
+            if not any(x and y for x, y in zip(sa, sb)):
+                out[(a, b)] = CODES[_name_of(tuple(x + y for x, y in zip(sa, sb)))]
+    return out
+
+
+def _name_of(signs) -> str:
+    return next(n for n, c in CODES.items() if signs_of(n) == ("T", tuple(signs)))
+
+
+CORNERS = _corners()
+CORNER_LEAST = 2  # samples of the diagonal a rounded corner must pass through to be a token
+
+
+def _corner(between: list, a: int, b: int) -> int | None:
+    """Of the runs ``(code, length)`` between two confirmed runs of codes a and b, the one
+    that is their corner's diagonal (the first longest), when the runs of that diagonal
+    hold at least :data:`CORNER_LEAST` samples; else None."""
+    diagonal = CORNERS.get((a, b))
+    if diagonal is None:
+        return None
+    best, total = None, 0
+    for k, (code, length) in enumerate(between):
+        if code == diagonal:
+            total += length
+            if best is None or length > between[best][1]:
+                best = k
+    return best if total >= CORNER_LEAST else None
+
+
 def debounce(codes: np.ndarray, alpha: int) -> list[Token]:
-    """Tokens from per-sample codes: runs of ≥ α samples, shorter excursions absorbed."""
+    """Tokens from per-sample codes: runs of ≥ α samples, shorter excursions absorbed —
+    except the diagonal a hand passes through when it rounds a corner between two
+    single-axis translations (up, then back: ``T_Y_N_Z`` between ``T_Y`` and ``T_N_Z``), kept
+    when it lasts :data:`CORNER_LEAST` samples or more: a quick rounded corner crosses the
+    diagonal's 30° band in fewer than α samples, yet the performer drew it."""
     n = len(codes)
     if n == 0:
         return []
@@ -129,6 +173,14 @@ def debounce(codes: np.ndarray, alpha: int) -> list[Token]:
     starts = np.concatenate([[0], change])
     lengths = np.diff(np.concatenate([starts, [n]]))
     confirmed = lengths >= alpha
+    run_codes = codes[starts]
+    kept = np.flatnonzero(confirmed)
+    for a, b in zip(kept[:-1], kept[1:]):
+        if b - a > 1:
+            k = _corner([(int(run_codes[r]), int(lengths[r])) for r in range(a + 1, b)], int(run_codes[a]),
+                        int(run_codes[b]))
+            if k is not None:
+                confirmed[a + 1 + k] = True
     c_codes, c_starts = codes[starts[confirmed]], starts[confirmed]
     if len(c_codes) == 0:
         return []
@@ -218,6 +270,7 @@ class Segmenter:
         self._absorber = params.absorber(rate)
         self._fast2 = 4.0 * params.eps * params.eps
         self._tok_fast = self._run_fast = None  # (first, last) sample over 2ε: token before the run, the run
+        self._since: list = []  # runs shorter than α since the last confirmed one (corner candidates)
 
     @property
     def pending(self) -> Token | None:
@@ -322,15 +375,28 @@ class Segmenter:
         if code == self._run_code:
             self._run_len += 1
         else:
+            if 0 < self._run_len < self.alpha:  # a short run: kept aside in case it is a corner
+                self._since.append((self._run_code, self._run_start, self._run_len, self._run_row, self._run_fast,
+                                    self._tok_fast))
             self._join_run()  # the run so far belongs to the token in progress
             self._run_code, self._run_start, self._run_len = code, i, 1
             self._run_row = row
         if speed2 >= self._fast2:  # first and last sample over 2ε, in the run
             self._run_fast = (i if self._run_fast is None else self._run_fast[0], i)
         if self._run_len == self.alpha:
+            since, self._since = self._since, []
             if self._cur is None:
                 self._cur, self._cur_start, self._cur_row = code, 0, self._row0
             elif code != self._cur:
+                k = _corner([(c, n) for c, _, n, _, _, _ in since], self._cur, code) if since else None
+                if k is not None:  # the token in progress ends at the corner; the corner is a token
+                    c_code, c_start, _, c_row, _, before = since[k]
+                    raw = Token(NAMES[self._cur], self._cur_start, c_start)
+                    out += self._absorber.push(raw, extent(self._cur_row, c_row, self.params.theta),
+                                               self._ramps(raw, before))
+                    fast = [f for *_, f, _ in since[k:] if f is not None]
+                    self._cur, self._cur_start, self._cur_row = c_code, c_start, c_row
+                    self._tok_fast = (fast[0][0], fast[-1][1]) if fast else None
                 raw = Token(NAMES[self._cur], self._cur_start, self._run_start)
                 out += self._absorber.push(raw, extent(self._cur_row, self._run_row, self.params.theta),
                                            self._ramps(raw))
@@ -342,8 +408,10 @@ class Segmenter:
             self._tok_fast = self._run_fast if self._tok_fast is None else (self._tok_fast[0], self._run_fast[1])
         self._run_fast = None
 
-    def _ramps(self, tok: Token) -> tuple[int, int]:
-        """Samples from a token's start to its first sample over 2ε, and from its last one to its end."""
-        if self._tok_fast is None:
+    def _ramps(self, tok: Token, fast="token") -> tuple[int, int]:
+        """Samples from a token's start to its first sample over 2ε, and from its last one to
+        its end (``fast``: that first and last sample; by default the token in progress's)."""
+        fast = self._tok_fast if fast == "token" else fast
+        if fast is None:
             return tok.end - tok.start, tok.end - tok.start
-        return self._tok_fast[0] - tok.start, tok.end - 1 - self._tok_fast[1]
+        return fast[0] - tok.start, tok.end - 1 - fast[1]
