@@ -4,6 +4,7 @@ loads with its stages, and the contact sheet draws them."""
 import tomllib
 from pathlib import Path
 
+import pytest
 
 from doodle.app.cli.main import main
 from library.manifest import BUILTIN, builtin
@@ -56,3 +57,33 @@ def test_library_show_and_list(capsys):
     assert len(capsys.readouterr().out.strip().splitlines()) == 28  # the recognisable actions
     assert main(["library", "show", "Fly"]) == 1
     assert "no action 'Fly'" in capsys.readouterr().err
+
+
+THESIS = Path(__file__).resolve().parents[2] / "shared" / "seeds" / "spatial-motion-doodles-thesis.txt"
+# the text's two unreadable tokens, as the library reads them: Despair's "T N G" is T_N_Y (a
+# hand sinking), Dodge's "T N G B" is T_N_X_N_Y (the diagonal back down that its other groups use)
+OCR = {"T_N_G": "T_N_Y", "T_N_G_B": "T_N_X_N_Y"}
+
+
+@pytest.mark.skipif(not THESIS.exists(), reason="../shared/seeds is not here")
+def test_every_expression_has_the_appendix_tokens_in_order():
+    """The 28-action table against thesis Appendix 2: each reconstructed expression holds
+    exactly the tokens the appendix prints for the action, in the same order — what was
+    guessed (where wrapped lines join, a stray parenthesis) is only the grouping, and each
+    guess is written in the action's ``note``."""
+    import re
+
+    text = THESIS.read_text()
+    block = text[text.index("Appendix 2: Animation Database"):][:12000]
+    actions = tomllib.loads((Path(BUILTIN) / "library.toml").read_text())["actions"]
+    starts = sorted((m.start(), a["name"]) for a in actions
+                    if (m := re.search(r"(?m)^" + re.escape(a["name"]) + r"\b", block)))
+    assert len(starts) == 28
+    for k, (at, name) in enumerate(starts):
+        end = starts[k + 1][0] if k + 1 < len(starts) else at + 800
+        printed = [OCR.get(t, t) for t in (t.replace(" ", "_") for t in re.findall(r"T(?:\s(?:N\s)?[XYZGB])+",
+                                                                                      block[at + len(name):end]))]
+        expression = next(a for a in actions if a["name"] == name).get("expression", "")
+        ours = re.findall(r"T(?:_(?:N_)?[XYZ])+", expression)
+        if name != "Idle":
+            assert ours == printed, name
