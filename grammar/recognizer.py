@@ -30,15 +30,12 @@ from grammar.contexter import InteractionSegment, LiveContexter, Refused, apply_
 from grammar.library import Compiled, compile_library
 from grammar.matcher import Matcher, Segment, match
 from grammar.shapes import Refiner, refine
-from library.manifest import builtin, combine, load_library
+from library.manifest import load_combined
 
 
 def load_actions(library_dir=None, use_builtin: bool = True) -> Compiled:
-    """The built-in library, extended or overridden by the one in ``library_dir``."""
-    user = load_library(library_dir) if library_dir else None
-    if not use_builtin and user is None:
-        raise DoodleError("no actions to recognise: the built-in library is left out and no user library is given")
-    return compile_library(combine(builtin() if use_builtin else None, user))
+    """The built-in library, extended or overridden by the one in ``library_dir``, compiled."""
+    return compile_library(load_combined(library_dir, use_builtin)[0])
 
 
 def track_automata(compiled: Compiled, tracks: list[str], threshold: float = 2.0,

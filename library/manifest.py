@@ -276,6 +276,15 @@ def builtin() -> Library:
     return load_library(BUILTIN)
 
 
+def load_combined(library_dir=None, use_builtin: bool = True) -> tuple[Library, Library | None]:
+    """The built-in library (unless ``use_builtin`` is False) extended or overridden by the
+    one in ``library_dir``; and that user library alone (None without one)."""
+    user = load_library(library_dir) if library_dir else None
+    if not use_builtin and user is None:
+        raise DoodleError("no actions: the built-in library is left out and no user library is given")
+    return combine(builtin() if use_builtin else None, user), user
+
+
 def combine(base: Library | None, user: Library | None) -> Library:
     """``user``'s actions override ``base``'s of the same name; new ones come after."""
     if base is None or user is None:

@@ -146,8 +146,10 @@ def check(motion: Motion, terrain=None, limits: Limits = Limits(), ground: float
     sliding = np.zeros(motion.frames, dtype=bool)
     standing = np.zeros(motion.frames, dtype=bool)  # a foot standing still above the ground
     lowest = np.full(motion.frames, np.inf)
+    sole_heights = []
     for ankle, sole in zip(feet, soles):
         sole_h = height(sole).min(axis=1)
+        sole_heights.append(sole_h)
         # flat: every point of the foot — ankle, toes, tips — as low as when the character stands
         # on it (its 10th percentile over the motion), so whatever the skeleton puts where
         foot_h = height(np.concatenate([positions[:, [ankle]], sole], axis=1))
@@ -173,7 +175,7 @@ def check(motion: Motion, terrain=None, limits: Limits = Limits(), ground: float
         for a, b in _runs(lowest > limits.hover):
             if (b - a) * dt > limits.flight:
                 hovering[a:b] = True
-    sole_top = np.max([height(sole).min(axis=1) for sole in soles], axis=0) if soles else lowest
+    sole_top = np.max(sole_heights, axis=0) if soles else lowest
     body_h = height(every).min(axis=1)
     sinking = np.flatnonzero(body_h < -limits.sink)
     return Check(motion.frames, motion.fps, tuple(np.flatnonzero(sliding)), tuple(pops),

@@ -18,7 +18,7 @@ from doodle.input.segmenter import SegmenterParams
 from grammar.library import Compiled, compile_library
 from doodle.app.placement import interaction_pairs
 from grammar.recognizer import recognize
-from library.manifest import builtin, combine, load_library
+from library.manifest import load_combined
 
 
 # --- compile: actions → animation ------------------------------------------------------------
@@ -61,10 +61,7 @@ class Actions:
 def load_for_compile(library_dir=None, use_builtin: bool = True) -> Actions:
     from retarget.clips import load_clips
 
-    user = load_library(library_dir) if library_dir else None
-    if not use_builtin and user is None:
-        raise DoodleError("no actions to compile: the built-in library is left out and no user library is given")
-    library = combine(builtin() if use_builtin else None, user)
+    library, user = load_combined(library_dir, use_builtin)
     return Actions(library, user, compile_library(library), load_clips(library))
 
 

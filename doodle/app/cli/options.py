@@ -98,7 +98,6 @@ def error(e: BaseException) -> None:
 def library_of(args):
     """The library the options name: the built-in one (unless ``--no-builtin``) combined
     with the one in ``--library``."""
-    from library.manifest import builtin, combine, load_library
+    from library.manifest import load_combined
 
-    user = load_library(args.library) if args.library else None
-    return combine(None if args.no_builtin else builtin(), user)
+    return load_combined(args.library, not args.no_builtin)[0]
