@@ -90,33 +90,211 @@ def planted(motion: Motion, feet: list[int], positions: np.ndarray | None = None
     return (above - above.min(axis=0) <= height) & (speed <= CONTACT_SPEED)
 
 
-def pin_feet(motion: Motion, feet: list[int], fade: int = 3, terrain=None) -> Motion:
-    """The motion with each foot held still over each of its contact intervals."""
+REACH = 0.35  # m: a pinned foot left farther behind than this by the body takes a new spot
+LOWEST = 0.2  # m: the most the pelvis is lowered for a foot on lower ground (a deep knee bend)
+
+
+def pin_feet(motion: Motion, feet: list[int], fade: int = 3, terrain=None, contacts: np.ndarray | None = None,
+             standing: list[float] | None = None) -> Motion:
+    """The motion with each foot held still over each of its contact intervals.
+
+    ``contacts`` (F, len(feet)): where the foot stands — the sequenced clips' own contacts
+    (:func:`retarget.sequence.contact_states`); without them, found on the motion
+    (:func:`planted`). A foot stands where it landed (its place at the interval's first
+    frame) on the ground: ``standing`` (m, per foot) is its ankle's height above the
+    ground when standing flat (default: its lowest height in the interval), so a foot the
+    clips or a style held up is put down. On uneven ``terrain`` every foot keeps, at every
+    frame, the height above the ground under it that it had above the ground under the
+    root (a swinging foot clears a rise, a standing one stands on its own ground), and
+    where a leg cannot reach its spot the pelvis is lowered: its height comes from the
+    ground under the feet, not under the root. Pins fade in and out over ``fade`` frames."""
     original = forward_kinematics(motion)[0]
-    contacts = planted(motion, feet, original, terrain)
+    if contacts is None:
+        contacts = planted(motion, feet, original, terrain)
+    rise = None
+    if terrain is not None:  # the ground under each foot relative to the ground under the root
+        under_root = terrain.height(original[:, 0][:, [0, 2]])
+        rise = [terrain.height(original[:, a][:, [0, 2]]) - under_root for a in feet]
+    targets, weights, helds = [], [], []
+    for k, ankle in enumerate(feet):
+        target, weight, held = _pins(original[:, ankle], contacts[:, k], fade, terrain,
+                                     None if standing is None else standing[k], None if rise is None else rise[k],
+                                     motion.fps)
+        targets.append(target)
+        weights.append(weight)
+        helds.append(held)
+    motion = _lower_to_reach(motion, original, feet, targets, weights)
+    world = forward_kinematics(motion)
     for k, ankle in enumerate(feet):
         knee = int(motion.skeleton.parents[ankle])
-        hip = int(motion.skeleton.parents[knee])
-        if knee < 0 or hip < 0:
+        hip = int(motion.skeleton.parents[knee]) if knee >= 0 else -1
+        if hip < 0 or not weights[k].any():
             continue
-        positions = original
-        contact = contacts[:, k]
-        target = positions[:, ankle].copy()
-        weight = np.zeros(motion.frames)
-        for s, e in _intervals(contact):
-            spot = positions[s:e, ankle]
-            target[max(0, s - fade): min(motion.frames, e + fade)] = [spot[:, 0].mean(), spot[:, 1].min(),
-                                                                      spot[:, 2].mean()]
-            weight[s:e] = 1.0
-            for k in range(1, fade + 1):  # fade in before and out after
-                w = 1.0 - k / (fade + 1)
-                if s - k >= 0:
-                    weight[s - k] = max(weight[s - k], w)
-                if e - 1 + k < motion.frames:
-                    weight[e - 1 + k] = max(weight[e - 1 + k], w)
-        if weight.any():
-            motion = two_bone_ik(motion, hip, knee, ankle, target, weight)
+        motion = two_bone_ik(motion, hip, knee, ankle, targets[k], weights[k], world=world)
+    if terrain is not None:  # the foot laid along the slope under it
+        motion = _soles_on_ground(motion, original, feet, terrain)
+    world = forward_kinematics(motion)
+    for k, ankle in enumerate(feet):  # a standing foot's lowest point (heel, toes) on the ground
+        knee = int(motion.skeleton.parents[ankle])
+        hip = int(motion.skeleton.parents[knee]) if knee >= 0 else -1
+        if hip < 0 or not helds[k].any():
+            continue
+        target = world[0][:, ankle] - np.outer(_clearance(motion, world, ankle, terrain), [0.0, 1.0, 0.0])
+        motion = two_bone_ik(motion, hip, knee, ankle, target, helds[k] ** 2, world=world)  # down as pins go
     return motion
+
+
+def _clearance(motion: Motion, world, ankle: int, terrain) -> np.ndarray:
+    """(F,) how far a foot's lowest point (its joints and end sites) is above the ground
+    under it (negative: into the ground)."""
+    from retarget.skeleton import end_site_positions
+
+    parents = motion.skeleton.parents
+    joints = [j for j in range(len(parents)) if _descends(parents, j, ankle)]
+    ends = end_site_positions(motion, world)
+    points = [world[0][:, j] for j in joints] + [ends[j] for j in joints if j in ends]
+    return np.min([p[:, 1] - _ground(terrain, p[:, [0, 2]]) for p in points], axis=0)
+
+
+def _descends(parents, j: int, ancestor: int) -> bool:
+    while j >= 0:
+        if j == ancestor:
+            return True
+        j = int(parents[j])
+    return False
+
+
+def _soles_on_ground(motion: Motion, original: np.ndarray, feet: list[int], terrain) -> Motion:
+    """Each foot pitched about its ankle so its toes keep the height above the ground under
+    them that they had above the ground under the root (a foot on a slope lies along it)."""
+    world = forward_kinematics(motion)
+    positions, rotations = world
+    under_root = terrain.height(original[:, 0][:, [0, 2]])
+    rots = motion.rotations.copy()
+    parents = motion.skeleton.parents
+    for ankle in feet:
+        toes = motion.skeleton.children(ankle)
+        if not toes:
+            continue
+        toe = toes[0]
+        v = positions[:, toe] - positions[:, ankle]
+        length = np.maximum(np.linalg.norm(v, axis=1), 1e-9)
+        want = terrain.height(positions[:, toe][:, [0, 2]]) + original[:, toe, 1] - under_root
+        pitch = np.arcsin(np.clip((want - positions[:, ankle, 1]) / length, -0.7, 0.7))
+        flat = np.linalg.norm(v[:, [0, 2]], axis=1)
+        heading = v[:, [0, 2]] / np.maximum(flat, 1e-9)[:, None]
+        new = np.column_stack([heading[:, 0] * np.cos(pitch), np.sin(pitch), heading[:, 1] * np.cos(pitch)])
+        axis = np.cross(_unit(v), new)
+        angle = np.arcsin(np.clip(np.linalg.norm(axis, axis=1), 0.0, 1.0))
+        delta = quat.exp(_unit(axis) * angle[:, None])
+        turned = quat.multiply(delta, rotations[:, ankle])
+        rots[:, ankle] = quat.multiply(quat.conjugate(rotations[:, int(parents[ankle])]), turned)
+    return replace(motion, rotations=rots)
+
+
+def _ground(terrain, xz: np.ndarray) -> np.ndarray:
+    return np.zeros(len(xz)) if terrain is None else terrain.height(xz)
+
+
+STEP_SPEED = 2.0  # m/s: a foot stepping to a new spot on its own takes at least distance / this
+STEP_LIFT = 0.05  # m: a foot moved to a new spot lifted less than this (steps lift the ankle 9–14 cm) is shuffled: it is given a step
+STEP_APEX = (0.04, 0.10)  # m: the apex of a given step, half its length, within these
+
+
+def _pins(ankle: np.ndarray, contact: np.ndarray, fade: int, terrain, standing: float | None,
+          rise: np.ndarray | None = None, fps: float = 30.0):
+    """One foot's targets (F, 3), weights (F,) and standing weights (F,): held at its landing
+    spot over each contact interval (a new spot once the body has left it more than
+    :data:`REACH` behind); between two spots, a foot that the blended clips shuffle along
+    the floor (lifted less than :data:`STEP_LIFT`) steps instead — lifted in an arc, over
+    at least the time a step of that length takes (borrowed from the stances either side);
+    on uneven ground (``rise``: the ground under the foot above the ground under the root)
+    raised by the ground under it elsewhere."""
+    frames = len(ankle)
+    follow = ankle.copy()
+    if rise is not None:
+        follow[:, 1] += rise
+    height = ankle[:, 1] - _ground(terrain, ankle[:, [0, 2]]) + (0.0 if rise is None else rise)
+    pins = []  # [first, stop, spot (3,), roll (stop - first,)]
+    for s, e in _intervals(contact):
+        while s < e:
+            spot = ankle[s, [0, 2]]
+            away = np.linalg.norm(ankle[s:e, [0, 2]] - spot, axis=1) > REACH
+            stop = max(s + int(np.argmax(away)) if away.any() else e, s + 1)
+            low = float(height[s:stop].min())
+            base = low if standing is None else standing
+            on = np.array([spot[0], _ground(terrain, spot[None])[0] + base, spot[1]])
+            pins.append([s, stop, on, np.clip(height[s:stop] - low, 0.0, 0.03)])  # a heel or toe rolling, kept
+            s = stop
+    steps = []
+    for a, b in zip(pins, pins[1:]):
+        length = float(np.linalg.norm((b[2] - a[2])[[0, 2]]))
+        lo, hi = a[1], b[0]  # the gap: frames [lo, hi) between the two stances
+        lifted = float((height[lo:hi] - a[2][1]).max()) if hi > lo else 0.0
+        if length < 0.05 or lifted >= STEP_LIFT:
+            continue
+        need = int(np.ceil(length / STEP_SPEED * fps)) + 1
+        while hi - lo < need and (a[1] - a[0] > 1 or b[1] - b[0] > 1):
+            if a[1] - a[0] > 1 and (hi - lo) % 2 == 0:
+                a[1] -= 1
+                lo -= 1
+            elif b[1] - b[0] > 1:
+                b[0] += 1
+                hi += 1
+            else:
+                a[1] -= 1
+                lo -= 1
+        steps.append((lo, hi, a[2], b[2], length))
+    pin, held = follow.copy(), np.zeros(frames)
+    for s, stop, on, roll in pins:
+        pin[s:stop] = on
+        pin[s:stop, 1] += roll[: stop - s]
+        held[s:stop] = 1.0
+        for k in range(1, fade + 1):  # held at the spot while fading in and out
+            w = 1.0 - k / (fade + 1)
+            if s - k >= 0 and w > held[s - k]:
+                pin[s - k], held[s - k] = pin[s], w
+            if stop - 1 + k < frames and w > held[stop - 1 + k]:
+                pin[stop - 1 + k], held[stop - 1 + k] = pin[stop - 1], w
+    from doodle.core.profiles import min_jerk
+
+    standing = held.copy()
+    for lo, hi, a, b, length in steps:  # a step in an arc from one spot to the next
+        u = (np.arange(lo, hi) - lo + 1) / (hi - lo + 1)
+        pin[lo:hi] = a + np.outer(min_jerk(u), b - a)
+        pin[lo:hi, 1] += np.clip(length / 2, *STEP_APEX) * np.sin(np.pi * u)
+        held[lo:hi] = 1.0
+        standing[lo:hi] = 0.0
+    # fading in and out, the foot is over its spot before it is down on it (and off it only
+    # once lifted): horizontally it eases faster than vertically, so it does not land sliding
+    across, down = 1.0 - (1.0 - held) ** 3, held**2
+    target = follow + (pin - follow) * np.column_stack([across, down, across])
+    return target, (np.ones(frames) if rise is not None else (held > 0).astype(float)), standing
+
+
+def _lower_to_reach(motion: Motion, positions: np.ndarray, feet: list[int], targets: list, weights: list) -> Motion:
+    """The root lowered, eased, wherever a pinned foot's spot is out of its straight leg's
+    reach (a foot on ground lower than the root's, a style that lifted the body)."""
+    from scipy.ndimage import gaussian_filter1d, maximum_filter1d
+
+    need = np.zeros(motion.frames)
+    for ankle, target, weight in zip(feet, targets, weights):
+        knee = int(motion.skeleton.parents[ankle])
+        hip = int(motion.skeleton.parents[knee]) if knee >= 0 else -1
+        if hip < 0:
+            continue
+        leg = 0.98 * (np.linalg.norm(motion.skeleton.offsets[knee]) + np.linalg.norm(motion.skeleton.offsets[ankle]))
+        goal = positions[:, ankle] + (target - positions[:, ankle]) * weight[:, None]
+        across = np.linalg.norm((goal - positions[:, hip])[:, [0, 2]], axis=1)
+        down = positions[:, hip, 1] - goal[:, 1]
+        reach = np.sqrt(np.maximum(leg**2 - np.minimum(across, leg) ** 2, 0.0))
+        need = np.maximum(need, np.where((weight > 0) & (across < 0.9 * leg), down - reach, 0.0))
+    if not need.any():
+        return motion
+    need = np.maximum(gaussian_filter1d(maximum_filter1d(np.minimum(need, LOWEST), 5), 1.5), np.minimum(need, LOWEST))
+    trans = motion.translations.copy()
+    trans[:, 0, 1] -= need
+    return replace(motion, translations=trans)
 
 
 def clamp_to_ground(motion: Motion, terrain=None) -> Motion:

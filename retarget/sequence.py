@@ -21,7 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from retarget.skeleton import Motion, Skeleton, forward_kinematics
+from retarget.skeleton import Motion, Skeleton, end_site_positions, forward_kinematics
 from retarget.trajectory import Span
 
 
@@ -41,6 +41,8 @@ class Placed:
     clip_in: float = 0.0  # clip time (s) played at the segment's start (a transition point)
     clip_out: float | None = None  # clip time (s) played at its end (None: the clip's end)
     gesture: tuple | None = None  # (times, fraction): gesture-based retiming, §5.3.3
+    contacts: np.ndarray | None = None  # (clip frames, feet) bool: where the clip's feet stand
+    pace: tuple | None = None  # (fraction of the span, clip time): a one-shot's retiming (:func:`paced`)
 
 
 def travel_curve(motion: Motion, pelvis: int) -> np.ndarray:
@@ -91,8 +93,42 @@ def clip_time(placed: Placed, t: np.ndarray) -> np.ndarray:
         cycle = (m.frames - 1) * m.frame_time
         phase = u * placed.cycles
         return np.where(u >= 1.0, cycle, (phase % 1.0) * cycle)
+    if placed.pace is not None:
+        return np.interp(u, *placed.pace)
     end = (m.frames - 1) * m.frame_time if placed.clip_out is None else placed.clip_out
     return placed.clip_in + u * (end - placed.clip_in)
+
+
+FASTEST = 11.0  # m/s: a retimed clip's joints move no faster (real motion capture: ≤ 12.2 m/s)
+
+
+def paced(motion: Motion, clip_in: float, clip_out: float | None, duration: float,
+          limit: float = FASTEST) -> tuple[np.ndarray, np.ndarray]:
+    """A one-shot clip's range retimed to last ``duration`` seconds (§5.3: ``T_P/T_A``)
+    without any joint going faster than ``limit``: where a uniform squeeze would, the slow
+    parts of the clip (holds, wind-ups) are squeezed more and the fast ones less. Returns
+    knots (fraction of the span, clip time) for :func:`clip_time`; uniform when it can be."""
+    end = (motion.frames - 1) * motion.frame_time if clip_out is None else clip_out
+    f0 = int(np.floor(clip_in / motion.frame_time + 1e-9))
+    f1 = int(np.ceil(end / motion.frame_time - 1e-9))
+    knots = np.clip(np.arange(f0, f1 + 1) * motion.frame_time, clip_in, end)
+    if len(knots) < 3 or duration <= 0:
+        return np.array([0.0, 1.0]), np.array([clip_in, end])
+    world = forward_kinematics(motion)
+    ends = end_site_positions(motion, world)
+    positions = np.concatenate([world[0]] + [e[:, None] for e in ends.values()], axis=1)[f0:f1 + 1]
+    step = np.diff(knots)
+    speed = np.linalg.norm(np.diff(positions, axis=0), axis=2).max(axis=1) / motion.frame_time
+    least = step * speed / limit  # the shortest each clip interval may last
+    if (end - clip_in) / duration * speed.max() <= limit or least.sum() >= duration:
+        return np.array([0.0, 1.0]), np.array([clip_in, end])
+    lo, hi = 0.0, duration / max(end - clip_in, 1e-9)  # the squeeze of the slow parts, by bisection
+    for _ in range(50):
+        c = (lo + hi) / 2
+        lo, hi = (c, hi) if np.maximum(c * step, least).sum() < duration else (lo, c)
+    out = np.maximum(hi * step, least)
+    u = np.concatenate([[0.0], np.cumsum(out)]) / out.sum()
+    return u, knots
 
 
 def pose_at(placed: Placed, t: np.ndarray, path_xz: np.ndarray, heading: np.ndarray,
@@ -146,6 +182,25 @@ def sequence(placed: list[Placed], times: np.ndarray, path_xz: np.ndarray, headi
     rots = np.zeros((frames, j, 4))
     weight = np.zeros(frames)
     boundaries = [pl.span.t0 for pl in placed[1:]]
+    for pl, idx, w in _blend_weights(placed, times, blend):
+        tt = times[idx]
+        tr, ro = pose_at(pl, tt, path_xz[idx], heading[idx], None if ground_y is None else ground_y[idx])
+        first = weight[idx] == 0
+        trans[idx] += tr * w[:, None, None]
+        prev = rots[idx]
+        dot = np.sum(prev * ro, axis=-1, keepdims=True)
+        ro = np.where(dot < 0, -ro, ro)
+        rots[idx] = np.where(first[:, None, None], ro * w[:, None, None], prev + ro * w[:, None, None])
+        weight[idx] += w
+    weight = np.maximum(weight, 1e-9)
+    trans /= weight[:, None, None]
+    rots /= np.linalg.norm(rots, axis=-1, keepdims=True)
+    return Motion(skeleton, trans, rots, 1.0 / fps), boundaries
+
+
+def _blend_weights(placed: list[Placed], times: np.ndarray, blend: float):
+    """Per placed clip: the output frames it plays in and its cross-fade weight there."""
+    out = []
     for k, pl in enumerate(placed):
         lo = pl.span.t0 - (blend / 2 if k > 0 else 0.0)
         hi = pl.span.t1 + (blend / 2 if k < len(placed) - 1 else 0.0)
@@ -163,18 +218,25 @@ def sequence(placed: list[Placed], times: np.ndarray, path_xz: np.ndarray, headi
             w *= _smoothstep((tt - (pl.span.t0 - blend / 2)) / blend)
         if k < len(placed) - 1:
             w *= 1.0 - _smoothstep((tt - (pl.span.t1 - blend / 2)) / blend)
-        tr, ro = pose_at(pl, tt, path_xz[idx], heading[idx], None if ground_y is None else ground_y[idx])
-        first = weight[idx] == 0
-        trans[idx] += tr * w[:, None, None]
-        prev = rots[idx]
-        dot = np.sum(prev * ro, axis=-1, keepdims=True)
-        ro = np.where(dot < 0, -ro, ro)
-        rots[idx] = np.where(first[:, None, None], ro * w[:, None, None], prev + ro * w[:, None, None])
-        weight[idx] += w
-    weight = np.maximum(weight, 1e-9)
-    trans /= weight[:, None, None]
-    rots /= np.linalg.norm(rots, axis=-1, keepdims=True)
-    return Motion(skeleton, trans, rots, 1.0 / fps), boundaries
+        out.append((pl, idx, w))
+    return out
+
+
+def contact_states(placed: list[Placed], times: np.ndarray, feet: int = 2, blend: float = 0.2) -> np.ndarray:
+    """(F, feet) bool: where the sequenced clips mean each foot to stand on the ground —
+    each clip's own contacts at the clip time it plays, voted with the cross-fade weights of
+    :func:`sequence` (a clip without contacts counts as standing)."""
+    vote = np.zeros((len(times), feet))
+    total = np.zeros(len(times))
+    for pl, idx, w in _blend_weights(placed, times, blend):
+        if pl.contacts is None or len(pl.contacts) == 0:
+            c = np.ones((len(idx), feet))
+        else:
+            f = np.rint(clip_time(pl, times[idx]) / pl.motion.frame_time).astype(int)
+            c = pl.contacts[np.clip(f, 0, len(pl.contacts) - 1)].astype(float)
+        vote[idx] += c * w[:, None]
+        total[idx] += w
+    return vote / np.maximum(total, 1e-9)[:, None] >= 0.5
 
 
 def _smoothstep(x: np.ndarray) -> np.ndarray:

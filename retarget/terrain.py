@@ -58,8 +58,11 @@ __all__ = [
 #: Gravity direction (unit vector) along which rays are cast.
 GRAVITY = np.array([0.0, -1.0, 0.0])
 
-#: Relief (max − min height) of :func:`sample_elevation` terrains, as a fraction of their size.
-SAMPLE_RELIEF_RATIO = 0.15
+#: Relief (max − min height) of :func:`sample_elevation` terrains, as a fraction of their size:
+#: the Jacksboro DEM at true scale (840 m of relief over its 30 km: heights shrunk as much as
+#: distances, so its slopes are the landscape's own — a median of about 9°, where 0.15 made a
+#: field of 40–65° scarps no one can walk); the MRI slice, a bumpy test surface.
+SAMPLE_RELIEF_RATIO = {"jacksboro": 0.028, "s1045": 0.15}
 
 #: Names accepted by :func:`sample_elevation` (and as terrain specs).
 SAMPLE_NAMES = ("jacksboro", "s1045")
@@ -586,7 +589,7 @@ def sample_elevation(name: str = "jacksboro", size: float = 20.0) -> HeightField
 
     Scaling: the grid's longer side spans ``size`` metres (``spacing = size / (max(rows,
     cols) - 1)``), heights are shifted so the minimum is 0 and scaled so the relief
-    (max − min) is ``SAMPLE_RELIEF_RATIO * size`` (3 m for the default 20 m), and the grid
+    (max − min) is ``SAMPLE_RELIEF_RATIO[name] * size`` (0.56 m of Jacksboro for the default 20 m), and the grid
     is centred on the origin in x and z.
     """
     size = _finite_float(size, "sample elevation size")
@@ -598,7 +601,7 @@ def sample_elevation(name: str = "jacksboro", size: float = 20.0) -> HeightField
     rows, cols = grid.shape
     spacing = size / (max(rows, cols) - 1)
     lo, hi = float(grid.min()), float(grid.max())
-    heights = (grid - lo) * (SAMPLE_RELIEF_RATIO * size / (hi - lo))
+    heights = (grid - lo) * (SAMPLE_RELIEF_RATIO[name] * size / (hi - lo))
     origin = (-(cols - 1) * spacing / 2.0, -(rows - 1) * spacing / 2.0)
     return HeightField(heights, spacing, origin)
 

@@ -116,16 +116,19 @@ def _arc_lift(t: np.ndarray, points: np.ndarray, doodle: np.ndarray, span: Span,
 
 
 def _retimed_jump(t: np.ndarray, points: np.ndarray, span: Span) -> np.ndarray:
-    """Travel only during execution: the segment's own path, squeezed into it."""
+    """Travel only during execution (the flight): the segment's own ground path, covered
+    at an even speed — a body in the air keeps its horizontal speed — whatever the hand's
+    own pace along it."""
     if len(t) < 2:
         return points
     u = (t - t[0]) / max(t[-1] - t[0], 1e-9)
     a, b = span.execution
     w = np.clip((u - a) / max(b - a, 1e-6), 0.0, 1.0)
-    src = w * (len(points) - 1)
-    k = np.minimum(np.floor(src).astype(int), len(points) - 2)
-    f = (src - k)[:, None]
-    return points[k] * (1 - f) + points[k + 1] * f
+    along = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(points[:, [0, 2]], axis=0), axis=1))])
+    if along[-1] < 1e-9:
+        return np.repeat(points[:1], len(points), axis=0)
+    keep = np.concatenate([[True], np.diff(along) > 1e-12])
+    return np.column_stack([np.interp(w * along[-1], along[keep], points[keep, k]) for k in range(points.shape[1])])
 
 
 TURNING_SPEED = 0.3  # m/s: slower drift of the path (a hand at rest) does not turn the character

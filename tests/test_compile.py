@@ -152,9 +152,10 @@ def test_compile_on_an_elevation_grid(tmp_path):
     motion = read_bvh(out / "c0.bvh", unit=1.0)
     hips = forward_kinematics(motion)[0][:, 0]
     ground = parse_terrain("jacksboro").height(hips[:, [0, 2]])
-    assert np.ptp(ground) > 0.5  # the relief is really there
+    assert np.ptp(ground) > 0.25  # the relief is really there (0.56 m over the 20 m grid, at true scale)
     above = hips[:, 1] - ground
-    assert 0.7 < above.min() and above.max() < 1.9  # (the jump rises)
+    assert 0.55 < above.min() and above.max() < 1.9  # (the jump crouches to 0.63 m on flat ground, and rises)
+    assert report["tracks"]["c0"]["check"]["passes"]  # feet on the ground under them: no hovering, sinking, sliding
 
 
 def test_bad_terrain_spec_is_one_line(tmp_path, capsys):

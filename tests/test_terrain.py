@@ -258,10 +258,10 @@ def test_sample_elevation_size_and_relief():
     assert z1 - z0 == pytest.approx(20.0 * 343 / 402)
     assert x0 == pytest.approx(-x1) and z0 == pytest.approx(-z1)  # centred on the origin
     assert hf.heights.min() == 0.0
-    assert hf.heights.max() == pytest.approx(SAMPLE_RELIEF_RATIO * 20.0)  # 3 m
+    assert hf.heights.max() == pytest.approx(SAMPLE_RELIEF_RATIO["jacksboro"] * 20.0)  # 0.56 m: true scale
     big = parse_terrain("jacksboro:40")
     assert big.extent[1] - big.extent[0] == pytest.approx(40.0)
-    assert big.heights.max() == pytest.approx(6.0)
+    assert big.heights.max() == pytest.approx(2 * SAMPLE_RELIEF_RATIO["jacksboro"] * 20.0)
 
 
 def test_sample_s1045():

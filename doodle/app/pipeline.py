@@ -198,35 +198,43 @@ def animate(track, tokens, segments, choices, times, skeleton, rest, scale, terr
     on it and sequenced with transitions (§5.4), feet pinned in their contacts and clamped
     to the ground."""
     from retarget.feet import clamp_to_ground, pin_feet
-    from retarget.sequence import Placed, sequence
+    from retarget.sequence import Placed, contact_states, paced, sequence
     from retarget.trajectory import world_path
 
     placed = [(*_span(seg, track, c), c) for seg, c in zip(segments, choices)]
-    spans = [span for span, _, _ in placed]
+    pieces = []
+    for span, travels, choice in placed:
+        clip = choice.clip
+        cycles, driven = 0.0, None
+        if span.cyclic:
+            cycles = max((span.t1 - span.t0) / clip.motion.duration, 1.0)
+            if travels and not span.in_place and clip.cycle_length:
+                driven = np.zeros(len(times))  # by the distance along the path, once it is laid
+        by_hand = retime == "gesture" or (style == "preferred" and choice.style != (0.0, 0.0))
+        gesture = gesture_timing(track, span) if by_hand and not span.cyclic else None
+        pieces.append(Placed(span, clip.motion, clip.roles["pelvis"], cycles, times, driven, travels,
+                             gesture=gesture, contacts=clip.contacts))
+    pieces = _transition_points(pieces, [c.clip for c in choices])
+    pieces = [replace(pc, pace=paced(pc.motion, pc.clip_in, pc.clip_out, pc.span.t1 - pc.span.t0))
+              if pc.cycles == 0 and pc.progress is None and pc.gesture is None else pc for pc in pieces]
+    pieces = [replace(pc, span=_in_flight(pc)) if pc.span.jumping else pc for pc in pieces]
+    spans = [pc.span for pc in pieces]
     front = quat.rotate(track.q[:1], np.array([[0.0, 0.0, 1.0]]))[0]  # the figurine's front at the start
     path, heading = world_path(track.t, track.p, spans, scale, terrain, jump_arc, origin,
                                float(np.arctan2(front[0], front[2])))
     frame_path = np.column_stack([np.interp(times, track.t, path[:, k]) for k in range(3)])
     frame_heading = _eased(np.interp(times, track.t, np.unwrap(heading)), fps)
     step = np.linalg.norm(np.diff(frame_path[:, [0, 2]], axis=0), axis=1)
-    pieces = []
-    for span, travels, choice in placed:
-        clip = choice.clip
-        cycles, progress = 0.0, None
-        if span.cyclic:
-            cycles = max((span.t1 - span.t0) / clip.motion.duration, 1.0)
-            if not span.in_place and clip.cycle_length:
-                inside = (times[1:] > span.t0) & (times[1:] <= span.t1)
-                progress = np.concatenate([[0.0], np.cumsum(np.where(inside, step, 0.0))])
-        by_hand = retime == "gesture" or (style == "preferred" and choice.style != (0.0, 0.0))
-        gesture = gesture_timing(track, span) if by_hand and not span.cyclic else None
-        pieces.append(Placed(span, clip.motion, clip.roles["pelvis"], cycles, times, progress if travels else None,
-                             travels, gesture=gesture))
-    pieces = _transition_points(pieces, [c.clip for c in choices])
+    for k, pc in enumerate(pieces):
+        if pc.progress is not None:
+            inside = (times[1:] > pc.span.t0) & (times[1:] <= pc.span.t1)
+            pieces[k] = replace(pc, progress=np.concatenate([[0.0], np.cumsum(np.where(inside, step, 0.0))]))
     motion, transitions = sequence(pieces, times, frame_path[:, [0, 2]], frame_heading, skeleton, fps,
                                    ground_y=frame_path[:, 1])
     if pin:
-        motion = pin_feet(motion, [rest.roles["left_foot"], rest.roles["right_foot"]], terrain=terrain)
+        feet = [rest.roles["left_foot"], rest.roles["right_foot"]]
+        motion = pin_feet(motion, feet, terrain=terrain, contacts=contact_states(pieces, times),
+                          standing=_standing_heights(rest, feet))
     motion = clamp_to_ground(motion, terrain)
     ranges = [(int(np.searchsorted(times, sp.t0)), int(min(np.searchsorted(times, sp.t1), len(times) - 1)))
               for sp in spans]
@@ -237,6 +245,52 @@ def animate(track, tokens, segments, choices, times, skeleton, rest, scale, terr
                      transitions=transitions, clips=used, roles=rest.roles, terrain=terrain, frame_ranges=ranges,
                      projected=projected, styles=[c.style for c in choices], efforts=[c.effort for c in choices],
                      sample_times=track.t)
+
+
+def _standing_heights(rest, feet: list[int]) -> list[float]:
+    """Each ankle's height above the lowest point of its foot (toes, end sites) in the rest
+    pose: how high it is when the foot stands flat on the ground."""
+    from retarget.skeleton import end_site_positions, forward_kinematics
+
+    world = forward_kinematics(rest.motion.slice(0, 1))
+    ends = end_site_positions(rest.motion.slice(0, 1), world)
+    parents = rest.motion.skeleton.parents
+    out = []
+    for ankle in feet:
+        below = [j for j in range(len(parents)) if _descends(parents, j, ankle)]
+        points = [world[0][0, j, 1] for j in below] + [ends[j][0, 1] for j in below if j in ends]
+        out.append(float(world[0][0, ankle, 1] - min(points)))
+    return out
+
+
+def _descends(parents, j: int, ancestor: int) -> bool:
+    while j >= 0:
+        if j == ancestor:
+            return True
+        j = int(parents[j])
+    return False
+
+
+def _in_flight(piece):
+    """A jump's span with its travel (``execution``) over the clip's flight — from the
+    frame both feet leave the ground to the frame one lands — as fractions of the range of
+    the clip it plays, so the root travels while the body is in the air and stands still
+    on the ground before and after."""
+    contacts = piece.contacts
+    if contacts is None or not len(contacts):
+        return piece.span
+    air = np.flatnonzero(~contacts.any(axis=1))
+    if not len(air):
+        return piece.span
+    m = piece.motion
+    start = piece.clip_in
+    end = (m.frames - 1) * m.frame_time if piece.clip_out is None else piece.clip_out
+    length = max(end - start, 1e-9)
+    take_off = np.clip((air[0] - 0.5) * m.frame_time, start, end)
+    landing = np.clip((air[-1] + 0.5) * m.frame_time, start, end)
+    if landing - take_off < 1e-6:
+        return piece.span
+    return replace(piece.span, execution=((take_off - start) / length, (landing - start) / length))
 
 
 TURN_EASE_S = 0.1  # s: the standard deviation of the Gaussian a heading's changes are eased over
@@ -367,14 +421,18 @@ def _stylized(clip, lt: float, lw: float, style: str = "modifiers", cycle: bool 
     """The clip with Time then Weight applied, its stages moved with it (``style``
     "preferred": motion scale and reshaping only, the timing left to the gesture; a
     ``cycle`` gets Weight's swing and posture only)."""
+    from retarget.analysis import foot_contacts
     from retarget.stylize import cyclic, preferred, stylize_staged
 
+    stages = clip.stages
     if cycle:
-        return replace(clip, motion=cyclic(clip.motion, lw))
-    if style == "preferred":
-        return replace(clip, motion=preferred(clip.motion, clip.stages, lt, lw))
-    motion, stages = stylize_staged(clip.motion, clip.stages, lt, lw)
-    return replace(clip, motion=motion, stages=stages)
+        motion = cyclic(clip.motion, lw)
+    elif style == "preferred":
+        motion = preferred(clip.motion, clip.stages, lt, lw)
+    else:
+        motion, stages = stylize_staged(clip.motion, clip.stages, lt, lw)
+    contacts = foot_contacts(motion, [clip.roles["left_foot"], clip.roles["right_foot"]])  # as the style plays them
+    return replace(clip, motion=motion, stages=stages, contacts=contacts)
 
 
 def read_edits(path) -> dict:
