@@ -16,13 +16,24 @@ Keyframing:
 * :func:`aim` (minimal rotation from a rest direction to a target), :func:`arm` (upper and
   fore arm directions in the chest frame) and :func:`leg` (two-bone IK of the ankle
   relative to the hip in the pelvis frame, foot kept flat) turn intentions into angles.
-* :func:`animate` — keys ``(time_s, pose, root_offset)`` → :class:`Motion`. Every Euler
-  angle is interpolated with a monotone cubic (PCHIP) through the keys, so motion eases
-  in and out at every extreme pose and never overshoots; angles are not wrapped, so a key
-  at 0 and one at −360 give a full turn (flips). The root offset (metres, from the rest
-  position of ``Hips``) is interpolated the same way. With ``loop=True`` the last key must
-  repeat the first; the curve is made periodic (velocities match across the seam) and
-  the last frame equals the first. Joints that no key names stay at rest.
+* :func:`animate` — keys ``(time_s, pose, root_offset)`` → :class:`Motion`. Each joint's
+  turn from one key to the next (its rotation vector) is accumulated key after key, and
+  that sum is interpolated with a monotone cubic (PCHIP), component by component: between
+  two keys a joint turns about (nearly) the axis of the shortest turn, a turn about one
+  axis is exactly an eased angle, nothing overshoots a key, and every extreme pose eases
+  in and out; a one-shot clip also
+  starts and ends at rest (zero velocity at its first and last key). Interpolating Euler
+  angles instead swings a limb far off the arc between two keys whose angles differ a lot
+  (a forearm keyed (9, 10, 3) then (178, −124, 42) degrees), which made fists pop. A joint
+  must turn less than 180° between consecutive keys (a full turn, as in a flip, takes at
+  least three keys). The root offset (metres, from the rest position of ``Hips``) is
+  interpolated the same way. With ``loop=True`` the last key must repeat the first; the
+  curve is made periodic (velocities match across the seam) and the last frame equals the
+  first. Joints that no key names stay at rest.
+* :func:`pace` — timing from distance: the gap between two keys is stretched (never
+  shortened) to at least the longest way a joint or end site travels from one key pose to
+  the next over a maximum speed; :func:`peak_speeds` measures a motion's fastest point
+  between consecutive keys, to correct the eased result (see ``make_clips.oneshot``).
 * :func:`plant` — foot locking: the root's horizontal motion is rebuilt so that the support
   foot (the lower one, or the one given per frame) does not move horizontally while it
   supports, and the body is lifted or lowered so the lowest foot point touches y = 0 on
@@ -31,14 +42,17 @@ Keyframing:
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
-from scipy.interpolate import PchipInterpolator
+from scipy.interpolate import CubicHermiteSpline, PchipInterpolator
 from scipy.spatial.transform import Rotation
 
 from retarget.bvh import euler_to_quat
 from retarget.skeleton import Motion, Skeleton, end_site_positions, forward_kinematics
 
-__all__ = ["STANDARD", "REST_HIPS", "pose", "aim", "arm", "leg", "animate", "plant", "feet_points",
+__all__ = ["STANDARD", "REST_HIPS", "pose", "aim", "arm", "leg", "animate", "plant", "feet_points", "pace",
+           "peak_speeds", "key_travel",
            "HIP_OFFSET", "THIGH", "SHIN"]
 
 REST_HIPS = np.array([0.0, 0.95, 0.0])
@@ -102,7 +116,9 @@ def pose(**joints) -> dict[str, tuple[float, float, float]]:
 
 
 def _euler(rot: Rotation) -> tuple[float, float, float]:
-    z, x, y = rot.as_euler("ZXY", degrees=True)
+    with warnings.catch_warnings():  # gimbal lock: any of the equivalent triples will do (keys
+        warnings.simplefilter("ignore", UserWarning)  # are interpolated as quaternions)
+        z, x, y = rot.as_euler("ZXY", degrees=True)
     # of the two equivalent solutions, keep the one with the smaller y and z twists (a
     # knee bent 105° reads (105, 0, 0), not (75, 180, -180)): keys interpolate sensibly
     wrap = lambda a: (a + 180.0) % 360.0 - 180.0  # noqa: E731
@@ -170,9 +186,8 @@ def leg(side: str, ankle, foot_pitch: float = 0.0, foot_yaw: float = 0.0) -> dic
 
 # --------------------------------------------------------------------------- animation
 
-def animate(keys, fps: float = 30, loop: bool = False) -> Motion:
-    """Interpolate keys ``(time_s, pose, root_offset)`` (root_offset: metres from the rest
-    Hips position, or None for zero) into a :class:`Motion` sampled at ``fps``."""
+def _key_values(keys) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Times (K,), quaternions (K, J, 4) and root offsets (K, 3) of the keys."""
     keys = sorted(keys, key=lambda k: k[0])
     times = np.array([k[0] for k in keys], float)
     if len(keys) < 2 or np.any(np.diff(times) <= 0):
@@ -185,10 +200,51 @@ def animate(keys, fps: float = 30, loop: bool = False) -> Motion:
             eul[i, STANDARD.index(name)] = a
         if off is not None:
             root[i] = off
+    quats = euler_to_quat("ZXY", eul[..., [2, 0, 1]].reshape(-1, 3)).reshape(len(keys), n, 4)
+    return times, quats, root
+
+
+def _turns(quats: np.ndarray) -> np.ndarray:
+    """(K, J, 3): each joint's turns (local rotation vectors, the short way) summed from the
+    first key: the k-th minus the (k−1)-th is the turn from key k−1 to key k."""
+    k, n = quats.shape[:2]
+    steps = (Rotation.from_quat(quats[:-1].reshape(-1, 4)).inv()
+             * Rotation.from_quat(quats[1:].reshape(-1, 4))).as_rotvec().reshape(k - 1, n, 3)
+    return np.concatenate([np.zeros((1, n, 3)), np.cumsum(steps, axis=0)])
+
+
+def _turned(quats: np.ndarray, turns: np.ndarray) -> np.ndarray:
+    """Quaternions ``quats`` (…, 4) turned on by local rotation vectors ``turns`` (…, 3)."""
+    shape = turns.shape[:-1]
+    q = Rotation.from_quat(quats.reshape(-1, 4)) * Rotation.from_rotvec(turns.reshape(-1, 3))
+    return q.as_quat().reshape(*shape, 4)
+
+
+def _monotone(times: np.ndarray, values: np.ndarray, still_ends: bool):
+    """PCHIP through ``values`` (K, D); with ``still_ends`` zero velocity at both ends."""
+    slopes = PchipInterpolator(times, values, axis=0).derivative()(times)
+    if still_ends:
+        slopes[[0, -1]] = 0.0
+    return CubicHermiteSpline(times, values, slopes, axis=0)
+
+
+def _motion(quats: np.ndarray, root: np.ndarray, fps: float) -> Motion:
+    quats = quats / np.linalg.norm(quats, axis=-1, keepdims=True)
+    translations = np.broadcast_to(STANDARD.offsets, (len(quats), len(STANDARD), 3)).copy()
+    translations[:, 0] = REST_HIPS + root
+    return Motion(STANDARD, translations, quats, 1.0 / fps)
+
+
+def animate(keys, fps: float = 30, loop: bool = False) -> Motion:
+    """Interpolate keys ``(time_s, pose, root_offset)`` (root_offset: metres from the rest
+    Hips position, or None for zero) into a :class:`Motion` sampled at ``fps``."""
+    times, quats, root = _key_values(keys)
+    k, n = quats.shape[:2]
+    turns = _turns(quats)
     frames = int(round((times[-1] - times[0]) * fps)) + 1
     t = times[0] + np.arange(frames) / fps
     t[-1] = min(t[-1], times[-1])
-    values = np.concatenate([eul.reshape(len(keys), -1), root], axis=1)
+    values = np.concatenate([turns.reshape(k, -1), root], axis=1)
     if loop:
         period = times[-1] - times[0]
         base = values[:-1]
@@ -197,13 +253,53 @@ def animate(keys, fps: float = 30, loop: bool = False) -> Motion:
         vv = np.concatenate([base - drift, base, base + drift, [values[-1] + drift]])
         curve = PchipInterpolator(tt, vv, axis=0)
     else:
-        curve = PchipInterpolator(times, values, axis=0)
+        curve = _monotone(times, values, still_ends=True)
     out = curve(t)
-    eul_t = out[:, : n * 3].reshape(frames, n, 3)
-    quats = euler_to_quat("ZXY", eul_t[..., [2, 0, 1]].reshape(-1, 3)).reshape(frames, n, 4)
-    translations = np.broadcast_to(STANDARD.offsets, (frames, n, 3)).copy()
-    translations[:, 0] = REST_HIPS + out[:, n * 3:]
-    return Motion(STANDARD, translations, quats, 1.0 / fps)
+    seg = np.clip(np.searchsorted(times, t, side="right") - 1, 0, k - 2)  # the key each frame turns on from
+    rot = _turned(quats[seg], out[:, : n * 3].reshape(frames, n, 3) - turns[seg])
+    return _motion(rot, out[:, n * 3:], fps)
+
+
+def _points(motion: Motion) -> np.ndarray:
+    """(F, P, 3): every joint and end site, as :func:`retarget.qa.check` measures them."""
+    world = forward_kinematics(motion)
+    ends = end_site_positions(motion, world)
+    return np.concatenate([world[0]] + [e[:, None] for e in ends.values()], axis=1)
+
+
+def key_travel(keys, samples: int = 12) -> np.ndarray:
+    """(K−1,): the longest path (m) any joint or end site travels from each key pose to the
+    next, the two poses blended along the shortest arcs (root offsets linearly)."""
+    times, quats, root = _key_values(keys)
+    turns = _turns(quats)
+    s = np.linspace(0.0, 1.0, samples + 1)[:, None, None]
+    out = []
+    for i in range(len(times) - 1):
+        q = _turned(np.broadcast_to(quats[i], (samples + 1, *quats.shape[1:])), s * (turns[i + 1] - turns[i]))
+        r = root[i] * (1 - s[:, 0]) + root[i + 1] * s[:, 0]
+        pts = _points(_motion(q, r, 30.0))
+        out.append(np.linalg.norm(np.diff(pts, axis=0), axis=2).sum(axis=0).max())
+    return np.array(out)
+
+
+def pace(keys, vmax: float, ease: float = 1.0) -> list:
+    """The keys retimed so that no point travels from one key pose to the next faster than
+    ``vmax`` m/s on average (× ``ease``: a point that stops at both keys peaks at 1.5 times
+    its mean speed, one that flows through them at about its mean): gaps only grow."""
+    keys = sorted(keys, key=lambda k: k[0])
+    times = np.array([k[0] for k in keys], float)
+    gaps = np.maximum(np.diff(times), ease * key_travel(keys) / vmax)
+    new = times[0] + np.concatenate([[0.0], np.cumsum(gaps)])
+    return [(float(t), p, r) for t, (_, p, r) in zip(new, keys)]
+
+
+def peak_speeds(motion: Motion, times) -> np.ndarray:
+    """(K−1,): the fastest point (m/s, frame to frame) between each pair of key ``times``."""
+    pts = _points(motion)
+    speed = np.linalg.norm(np.diff(pts, axis=0), axis=2).max(axis=1) / motion.frame_time
+    mid = (np.arange(len(speed)) + 0.5) * motion.frame_time + float(times[0])
+    seg = np.clip(np.searchsorted(np.asarray(times, float), mid) - 1, 0, len(times) - 2)
+    return np.array([speed[seg == i].max(initial=0.0) for i in range(len(times) - 1)])
 
 
 FOOT_POINTS = {side: [STANDARD.index(f"{side}Foot"), STANDARD.index(f"{side}ToeBase")] for side in ("Left", "Right")}

@@ -23,7 +23,7 @@ import numpy as np
 if __package__ in (None, ""):
     sys.path.insert(0, str(Path(__file__).resolve().parents[2]))
 
-from library.builtin.humanoid import animate, arm, leg, plant, pose  # noqa: E402
+from library.builtin.humanoid import HIP_OFFSET, animate, arm, leg, pace, peak_speeds, plant, pose  # noqa: E402
 from retarget.analysis import cycle_length  # noqa: E402
 from retarget.bvh import write_bvh  # noqa: E402
 from retarget.skeleton import Motion  # noqa: E402
@@ -78,6 +78,12 @@ def crouch(depth, fwd=0.0, spread=0.0):
     return {**leg("Left", (spread, -0.80 + depth, -fwd)), **leg("Right", (-spread, -0.80 + depth, -fwd))}
 
 
+def peel(side):
+    """A foot about to leave the ground: the heel up 7 cm, the toes still on the spot where
+    they stood (the foot rolls over them instead of sliding off)."""
+    return leg(side, (0, -0.727, 0.05), 25)
+
+
 # --------------------------------------------------------------------------- one-shots
 
 class Clip:
@@ -85,21 +91,43 @@ class Clip:
         self.motion, self.stages, self.cyclic = motion, stages, cyclic
 
 
+V_MAX = 10.0  # m/s: the fastest any joint of a built-in clip moves (real mocap: ≤ 10.3 Bandai, ≤ 12.2
+# DeepMimic); the compile pipeline may retime and stylise a clip faster still, hence the margin
+
+
 def oneshot(keys, marks, support=None, airborne=None):
     """keys: (time, pose, root_offset) with the first and last at rest; marks: the times of
     the four stage-ending keys. ``airborne``: (t0, t1) during which no foot supports;
-    ``support``: 'left' / 'right' (for (t0, t1) windows: list of (t0, t1, side))."""
-    keys = [(t, p, r) for t, p, r in keys]
+    ``support``: list of (t0, t1, side) windows, side 'left' / 'right' / 'both' / 'air'.
+
+    The keys' times are a minimum: :func:`pace` stretches every gap the joints cannot cross
+    at :data:`V_MAX`, then gaps whose planted motion still peaks faster are stretched by
+    the excess; the marks and windows move with their keys."""
+    keys = sorted(keys, key=lambda k: k[0])
+    old = np.array([k[0] for k in keys], float)
+    new = np.array([k[0] for k in pace(keys, V_MAX)], float)
+    for _ in range(8):
+        when = lambda t: float(np.interp(t, old, new))  # noqa: E731
+        m = _planted([(when(t), p, r) for t, p, r in keys], support, airborne, when)
+        peaks = peak_speeds(m, new)
+        if peaks.max() <= V_MAX:
+            break
+        gaps = np.diff(new) * np.maximum(peaks / V_MAX * 1.03, 1.0)
+        new = new[0] + np.concatenate([[0.0], np.cumsum(gaps)])
+    stages = [int(round(when(t) * FPS)) for t in marks]
+    return Clip(m, stages)
+
+
+def _planted(keys, support, airborne, when) -> Motion:
     m = animate(keys, FPS)
     sup = np.full(m.frames, 2)
     for t0, t1, side in (support or []):
-        sup[int(round(t0 * FPS)):int(round(t1 * FPS)) + 1] = {"left": 0, "right": 1, "air": -1}[side]
+        sup[int(round(when(t0) * FPS)):int(round(when(t1) * FPS)) + 1] = \
+            {"left": 0, "right": 1, "both": 2, "air": -1}[side]
     if airborne:
         t0, t1 = airborne
-        sup[int(round(t0 * FPS)) + 1:int(round(t1 * FPS))] = -1
-    m = plant(m, sup)
-    stages = [int(round(t * FPS)) for t in marks]
-    return Clip(m, stages)
+        sup[int(round(when(t0) * FPS)) + 1:int(round(when(t1) * FPS))] = -1
+    return plant(m, sup)
 
 
 def clip_idle():
@@ -173,12 +201,55 @@ def clip_walk_back():
     return gait(1.2, (0, 0, -1), 0.5, back=True, height=0.79)
 
 
+def _ease(w, w0=0.1, w1=0.85):
+    """Smoothstep from 0 (before ``w0``) to 1 (after ``w1``)."""
+    x = np.clip((np.asarray(w, float) - w0) / (w1 - w0), 0.0, 1.0)
+    return x * x * (3 - 2 * x)
+
+
+def side_step(sign, period=1.5, step=0.45, swing=0.32, closed=0.16, lift=0.08):
+    """Side steps to the character's left (``sign`` = 1) or right (−1): the leading foot steps
+    ``step`` m out, then the trailing foot closes to ``closed`` m from it, one after the
+    other (each swing ``swing`` of the cycle, both feet down in between); the pelvis moves
+    steadily and sinks a little as the stance widens. A swinging foot rises before it moves
+    and moves no more in its last 15 % (it is set down straight), so a foot on the ground
+    never slides. The cycle is ``period`` s and travels ``step`` m: two steps."""
+    frames = int(round(period * FPS))
+    lead, trail = ("Left", "Right") if sign > 0 else ("Right", "Left")
+    keys, support = [], []
+    for i in range(frames + 1):
+        ph = i / frames + 0.41  # start in double support: the loop seam falls where all is smooth
+        cyc, f = np.floor(ph), ph % 1.0
+        w_lead, w_trail = f / swing, (f - 0.5) / swing
+        out = {lead: step * (cyc + _ease(w_lead)) + closed / 2,  # along the way, from the start
+               trail: step * (cyc + _ease(w_trail)) - closed / 2}
+        up = {lead: lift * np.sin(np.pi * np.clip(w_lead, 0, 1)) ** 2,
+              trail: lift * np.sin(np.pi * np.clip(w_trail, 0, 1)) ** 2}
+        pelvis = step * (ph + 0.25 - 0.475 * swing)  # steady, on average midway between the feet
+        spread = (out[lead] - out[trail] - closed) / step  # 0 closed … 1 widest
+        depth = 0.775 + 0.015 * spread
+        p = {}
+        for side in ("Left", "Right"):
+            hip = HIP_OFFSET if side == "Left" else -HIP_OFFSET
+            x = sign * (out[side] - pelvis) - hip
+            p.update(leg(side, (x, -depth + up[side], 0.0)))
+        p.update(arms((0.25, -1, 0.0), (0.18, -1, 0.15)))
+        p["Spine"] = (2, 0, -3 * sign * (spread - 0.5))  # the chest leans a little towards the lead foot
+        keys.append((i / FPS, p, (sign * pelvis, 0.0, 0.0)))
+        swinging = 0 < f < swing and lead or 0.5 < f < 0.5 + swing and trail or None
+        stand = {None: 2, "Left": 1, "Right": 0}[swinging]
+        support.append(stand)
+    m = plant(animate(keys, FPS, loop=True), support)
+    q = frames // 4
+    return Clip(m, [q, 2 * q, 3 * q, frames - 1], cyclic=True)
+
+
 def clip_side_left():
-    return gait(1.0, (1, 0, 0), 0.24, lift=0.09, duty=0.6, height=0.79)
+    return side_step(1)
 
 
 def clip_side_right():
-    return gait(1.0, (-1, 0, 0), 0.24, lift=0.09, duty=0.6, height=0.79)
+    return side_step(-1)
 
 
 def clip_jump():
@@ -220,30 +291,31 @@ def clip_punch():
 def clip_kick():
     keys = [
         (0.0, P(), None),
-        (0.3, P(arms((0.6, -0.7, 0.1), (0.5, -0.5, 0.4)), leg("Left", (0, -0.78, 0)),
-                leg("Right", (0, -0.74, -0.10), 10)), None),  # shift weight, lift a little
+        (0.3, P(arms((0.6, -0.7, 0.1), (0.5, -0.5, 0.4)), peel("Right")), None),  # shift weight, heel up
         (0.55, P(arms((0.7, -0.3, 0.3), (0.5, 0.2, 0.6), (0.6, -0.4, -0.4), (0.5, -0.3, 0.3)),
                  leg("Left", (0, -0.76, 0)), leg("Right", (0, -0.55, -0.35), 30), Spine=(-5, 0, 0)), None),
         (0.72, P(arms((0.7, -0.2, -0.3), (0.6, 0.0, 0.2), (0.6, -0.6, 0.6), (0.4, -0.5, 0.7)),
                  leg("Left", (0, -0.78, 0)), leg("Right", (0, -0.25, 0.75), 50), Spine=(-12, 0, 0)), None),
         (0.95, P(arms((0.6, -0.5, 0.1), (0.5, -0.3, 0.4)), leg("Left", (0, -0.78, 0)),
                  leg("Right", (0, -0.55, 0.35), 20), Spine=(-4, 0, 0)), None),
+        (1.25, P(arms((0.4, -0.8, 0.05), (0.3, -0.8, 0.25)), leg("Left", (0, -0.79, 0)),
+                 leg("Right", (0, -0.755, 0.0))), None),  # the foot above its spot, set down straight
         (1.6, P(), None),
     ]
-    return oneshot(keys, [0.3, 0.55, 0.72, 0.95], support=[(0.18, 9.0, "left")])
+    return oneshot(keys, [0.3, 0.55, 0.72, 0.95], support=[(0.0, 9.0, "left")])
 
 
 def clip_stomp():
     keys = [
         (0.0, P(), None),
-        (0.25, P(arms((0.4, -1, 0), (0.3, -1, 0.2)), leg("Right", (0, -0.79, 0)), Spine=(3, 0, 0)), None),
-        (0.6, P(arms((0.5, -0.6, 0), (0.4, -0.3, 0.3)), leg("Right", (0, -0.79, 0)),
+        (0.25, P(arms((0.4, -1, 0), (0.3, -1, 0.2)), peel("Left"), Spine=(3, 0, 0)), None),  # heel up
+        (0.6, P(arms((0.5, -0.6, 0), (0.4, -0.3, 0.3)),
                 leg("Left", (0, -0.45, 0.15), -10), Spine=(-6, 0, 0)), None),  # knee high
         (0.72, P(arms((0.3, -1, 0.2), (0.2, -1, 0.4)), crouch(0.08), Spine=(12, 0, 0), Neck=(10, 0, 0)), None),
         (0.95, P(arms((0.3, -1, 0.2), (0.2, -1, 0.4)), crouch(0.12), Spine=(15, 0, 0), Neck=(12, 0, 0)), None),
         (1.5, P(), None),
     ]
-    return oneshot(keys, [0.25, 0.6, 0.72, 0.95], support=[(0.1, 9.0, "right")])
+    return oneshot(keys, [0.25, 0.6, 0.72, 0.95], support=[(0.0, 9.0, "right")])
 
 
 def clip_raise_one_arm():
@@ -312,17 +384,28 @@ def clip_stop():
 
 
 def clip_get_angry():
-    fists = arms((0.5, -0.8, 0.1), (0.2, 0.4, 0.6))
+    """Anger at a glance: the shoulders hunch up, the fists come up to the chest with a knee,
+    then are shaken down hard as the right foot stamps and the body leans forward glaring
+    (twice), and stay clenched and tense before the body lets go."""
+    hunch = dict(LeftShoulder=(0, 0, 12), RightShoulder=(0, 0, -12))  # shoulders raised
+    high = arms((0.3, -0.7, 0.4), (-0.3, 0.8, 0.4))  # fists up in front of the chest, elbows bent
+    down = arms((-0.08, -1, 0.12), (-0.12, -1, 0.3))  # fists shaken down by the thighs (the raised
+    # shoulders tilt the arms out), arms nearly straight
+    mid = arms((0.25, -0.9, 0.25), (0.05, -0.2, 0.95))  # fists back up to the belly
+    glare = dict(Spine=(14, 0, 0), Spine1=(6, 0, 0), Neck=(12, 0, 0), Head=(-14, 0, 0))  # lean in, head forward
+    lift = leg("Right", (0, -0.58, 0.0))  # knee up for the stamp
+    stamp = {**crouch(0.05), **leg("Right", (0, -0.75, 0.0))}
     keys = [
         (0.0, P(), None),
-        (0.25, P(fists, Spine=(3, 0, 0)), None),
-        (0.5, P(fists, Spine=(-4, 0, -8), Neck=(-8, 0, 0)), None),  # lean back/left
-        (0.75, P(arms((0.7, -0.5, 0.2), (0.5, 0.6, 0.4)), Spine=(10, 0, 10), Spine1=(5, 0, 4), Neck=(10, 0, 0),
-                 Head=(10, 0, 0)), None),
-        (1.05, P(fists, Spine=(6, 0, -6), Neck=(6, 0, 0)), None),
-        (1.7, P(), None),
+        (0.3, P(mid, peel("Right"), LeftShoulder=(0, 0, 5), RightShoulder=(0, 0, -5), Spine=(4, 0, 0)), None),  # prep
+        (0.6, P(high, lift, hunch, Spine=(-4, 0, 0), Neck=(-4, 0, 0), Head=(-6, 0, 0)), None),  # antic: gather
+        (0.8, P(down, stamp, hunch, glare), None),  # exec: fists down, stamp
+        (1.0, P(mid, stamp, hunch, glare), None),
+        (1.2, P(down, stamp, hunch, {**glare, "Spine": (16, 0, 0)}), None),  # shaken down again
+        (1.7, P(arms((0.0, -1, 0.15), (-0.05, -1, 0.35)), crouch(0.03), hunch, glare), None),  # follow: tense, glaring
+        (2.4, P(), None),
     ]
-    return oneshot(keys, [0.25, 0.5, 0.75, 1.05])
+    return oneshot(keys, [0.3, 0.6, 0.8, 1.7], support=[(0.0, 0.8, "left")])
 
 
 def clip_despair():
@@ -458,38 +541,44 @@ def clip_uppercut():
 def clip_crescent_kick():
     keys = [
         (0.0, P(), None),
-        (0.3, P(arms((0.6, -0.7, 0.1), (0.5, -0.5, 0.4)), leg("Left", (0, -0.78, 0)),
-                leg("Right", (0, -0.72, -0.12), 10)), None),
+        (0.3, P(arms((0.6, -0.7, 0.1), (0.5, -0.5, 0.4)), peel("Right")), None),
         (0.55, P(arms((0.8, -0.3, 0.2), (0.6, 0.0, 0.4)), leg("Left", (0, -0.77, 0)),
                  leg("Right", (0.30, -0.40, 0.45), 20), Spine=(-5, -10, 0)), None),  # leg across, low
         (0.8, P(arms((0.8, -0.2, 0.0), (0.6, 0.1, 0.2)), leg("Left", (0, -0.77, 0)),
                 leg("Right", (-0.35, -0.05, 0.55), 40), Spine=(-10, 10, 0)), None),  # arc out and high
         (1.0, P(arms((0.7, -0.5, 0.1), (0.5, -0.3, 0.3)), leg("Left", (0, -0.78, 0)),
                 leg("Right", (-0.35, -0.50, 0.2), 20), Spine=(-4, 5, 0)), None),
-        (1.6, P(), None),
+        (1.3, P(arms((0.4, -0.8, 0.05), (0.3, -0.8, 0.25)), leg("Left", (0, -0.79, 0)),
+                leg("Right", (0, -0.755, 0.0))), None),  # the foot above its spot, set down straight
+        (1.7, P(), None),
     ]
-    return oneshot(keys, [0.3, 0.55, 0.8, 1.0], support=[(0.18, 9.0, "left")])
+    return oneshot(keys, [0.3, 0.55, 0.8, 1.0], support=[(0.0, 9.0, "left")])
 
 
 def _flip(sign):
+    """A standing (back) flip. The body turns about the hips: it takes off already leaning
+    into the turn and tucks at once (knees to the chest: the feet close to the axis), so the
+    turn is quick without the extended limbs sweeping fast; the flight lasts 0.64 s."""
     tuck = {**crouch(0.40, fwd=-0.35), **arms((0.2, -0.3, 0.9), (-0.2, -0.8, 0.4))}
+    half = {**crouch(0.22, fwd=-0.15), **arms((0.2, 0.2, 0.9), (0.0, -0.4, 0.9))}
     keys = [
         (0.0, P(), (0, 0, 0)),
         (0.2, P(crouch(0.06), arms((0.3, -0.9, 0.2), (0.2, -0.8, 0.4))), (0, 0, 0)),
         (0.5, P(crouch(0.30, fwd=0.05), arms((0.2, -0.6, -0.8) if sign > 0 else (0.2, -0.5, 0.8),
                                              (0.1, -0.6, -0.8) if sign > 0 else (0.1, -0.3, 0.9)),
                 Spine=(25 if sign > 0 else 10, 0, 0)), (0, 0, 0)),
-        (0.66, P(leg("Left", (0, -0.81, -0.05), 35), leg("Right", (0, -0.81, -0.05), 35), arms((0.2, 1, 0.1), (0.2, 1, 0.1)),
-                 Hips=(sign * 20, 0, 0)), (0, 0.0, 0.0)),  # take off
-        (0.9, P(tuck, Spine=(30, 0, 0), Neck=(20, 0, 0), Hips=(sign * 170, 0, 0)), (0, 0.75, sign * 0.35)),
-        (1.1, P(tuck, Spine=(30, 0, 0), Neck=(20, 0, 0), Hips=(sign * 290, 0, 0)), (0, 0.55, sign * 0.55)),
-        (1.28, P(crouch(0.05, fwd=0.05), arms((0.6, 0.3, 0.6), (0.6, 0.3, 0.6)), Hips=(sign * 350, 0, 0)),
-         (0, 0.0, sign * 0.7)),  # land
-        (1.5, P(crouch(0.30, fwd=0.08), arms((0.6, 0.0, 0.6), (0.5, 0.0, 0.8)), Spine=(25, 0, 0),
+        (0.72, P(leg("Left", (0, -0.81, -0.05), 35), leg("Right", (0, -0.81, -0.05), 35),
+                 arms((0.2, 0.7, 0.7), (0.2, 0.7, 0.7)), Hips=(sign * 35, 0, 0)), (0, 0.05, sign * 0.05)),  # take off
+        (0.90, P(half, Spine=(20, 0, 0), Neck=(10, 0, 0), Hips=(sign * 105, 0, 0)), (0, 0.50, sign * 0.20)),
+        (1.08, P(tuck, Spine=(30, 0, 0), Neck=(20, 0, 0), Hips=(sign * 190, 0, 0)), (0, 0.62, sign * 0.38)),
+        (1.26, P(half, Spine=(20, 0, 0), Neck=(10, 0, 0), Hips=(sign * 270, 0, 0)), (0, 0.42, sign * 0.55)),
+        (1.44, P(crouch(0.10, fwd=0.05), arms((0.6, 0.3, 0.6), (0.6, 0.3, 0.6)), Hips=(sign * 330, 0, 0)),
+         (0, 0.0, sign * 0.7)),  # land, still turning: the crouch absorbs the rest
+        (1.7, P(crouch(0.30, fwd=0.08), arms((0.6, 0.0, 0.6), (0.5, 0.0, 0.8)), Spine=(25, 0, 0),
                 Hips=(sign * 360, 0, 0)), (0, 0, sign * 0.7)),
-        (2.1, P(Hips=(sign * 360, 0, 0)), (0, 0, sign * 0.7)),
+        (2.3, P(Hips=(sign * 360, 0, 0)), (0, 0, sign * 0.7)),
     ]
-    return oneshot(keys, [0.2, 0.5, 1.1, 1.5], airborne=(0.66, 1.28))
+    return oneshot(keys, [0.2, 0.5, 1.08, 1.7], airborne=(0.72, 1.44))
 
 
 def clip_flip():
@@ -544,17 +633,23 @@ def clip_slapped():
 
 
 def clip_kiss():
+    """A kiss for a partner facing the character about 0.5 m away: the hips stay back, the
+    upper body leans in from them, the head tilts and reaches forward with the chin a little
+    up, and the hands reach out towards the partner's shoulders; the chest stays clear of
+    the partner (the reach is the head's and the hands')."""
+    hips_back = {**leg("Left", (0.0, -0.79, 0.06)), **leg("Right", (0.0, -0.79, 0.06))}
+    reach = arms((0.4, -0.6, 0.55), (-0.05, 0.95, 0.25))  # hands up, 0.3 m out: towards the partner's shoulders
+    lean = dict(Spine=(20, 0, 0), Spine1=(6, 0, 0), Neck=(20, 0, 0))
     keys = [
         (0.0, P(), None),
-        (0.3, P(arms((0.4, -0.7, 0.6), (0.2, 0.0, 1))), None),
-        (0.55, P(arms((0.4, -0.6, 0.6), (0.2, 0.1, 1)), Spine=(-3, 0, 0), Head=(-6, 0, 0)), None),
-        (1.0, P(arms((0.5, -0.3, 0.8), (-0.3, 0.1, 0.9)), leg("Left", (0.0, -0.79, -0.05)),
-                leg("Right", (0.0, -0.79, -0.05)), Spine=(10, 0, 0), Neck=(12, 0, 0), Head=(8, 12, -10)), None),
-        (1.7, P(arms((0.5, -0.3, 0.8), (-0.3, 0.1, 0.9)), leg("Left", (0.0, -0.79, -0.05)),
-                leg("Right", (0.0, -0.79, -0.05)), Spine=(10, 0, 0), Neck=(12, 0, 0), Head=(8, 12, -12)), None),
-        (2.4, P(), None),
+        (0.35, P(arms((0.3, -0.8, 0.4), (0.2, -0.4, 0.8)), Head=(4, 0, 0)), None),  # prep: hands start to lift
+        (0.6, P(arms((0.3, -0.6, 0.6), (0.2, 0.0, 1)), Spine=(-2, 0, 0), Head=(-4, 0, 0)), None),  # antic: a breath
+        (1.1, P(reach, hips_back, lean, Head=(-10, 6, -16)), None),  # exec: lean in, head tilted
+        (1.8, P(reach, hips_back, lean, Head=(-10, 7, -18)), None),  # hold
+        (2.2, P(arms((0.3, -0.7, 0.5), (0.2, -0.2, 0.9)), Spine=(4, 0, 0), Head=(2, 3, -6)), None),  # hands down in front
+        (2.7, P(), None),
     ]
-    return oneshot(keys, [0.3, 0.55, 1.0, 1.7])
+    return oneshot(keys, [0.35, 0.6, 1.1, 1.8])
 
 
 # --------------------------------------------------------------------------- output
