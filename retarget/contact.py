@@ -14,6 +14,8 @@ of the body and of the clip untouched.
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 
 from doodle.core.arap import deform
@@ -71,3 +73,115 @@ def reach(motion: Motion, target, frame: int, side: str = "right", ease_s: float
     goal = arap_path(world[0][:, hand], frame, np.asarray(target, dtype=float), frame - ease, frame + ease)
     weight = (np.abs(np.arange(motion.frames) - frame) < ease).astype(float)
     return two_bone_ik(motion, shoulder, elbow, hand, goal, weight, world=world)
+
+
+def facing_frame(motion: Motion, world=None) -> np.ndarray:
+    """(F, 3, 3) per frame the pelvis's ground frame — columns right, up, front — from the
+    root's heading (a clip faces +z; its right is −x)."""
+    from scipy.spatial.transform import Rotation
+
+    rotations = (world if world is not None else forward_kinematics(motion))[1]
+    front = Rotation.from_quat(rotations[:, 0]).apply([0.0, 0.0, 1.0]) * [1.0, 0.0, 1.0]
+    front /= np.maximum(np.linalg.norm(front, axis=1, keepdims=True), 1e-9)
+    up = np.tile([0.0, 1.0, 0.0], (len(front), 1))
+    return np.stack([np.cross(front, up), up, front], axis=2)
+
+
+def body_offset(motion: Motion, joint: int, frame: int, world=None) -> np.ndarray:
+    """``joint`` at ``frame`` relative to the root's start on the ground, in the root's
+    ground frame: (right, up, front) metres."""
+    world = world if world is not None else forward_kinematics(motion)
+    positions = world[0]
+    axes = facing_frame(motion, world)[frame]
+    d = positions[frame, joint] - positions[0, 0] * [1.0, 0.0, 1.0]
+    return d @ axes
+
+
+def contact_frame(motion: Motion, stages, joint: int, world=None) -> int:
+    """The clip frame its contact happens at: within its execution stage, the frame whose
+    ``joint`` (the slapping hand, the kissing head) reaches farthest forward."""
+    world = world if world is not None else forward_kinematics(motion)
+    lo, hi = stages.bounds()["execution"]
+    hi = min(max(hi, lo + 1), motion.frames)
+    forward = [body_offset(motion, joint, f, world)[2] for f in range(lo, hi)]
+    return lo + int(np.argmax(forward))
+
+
+def playing_frame(motion: Motion, clip: Motion, clip_frame: int, first: int, last: int) -> int:
+    """The frame of ``motion`` between ``first`` and ``last`` that plays ``clip``'s frame
+    ``clip_frame``: the one whose joints' local rotations (the root's left out) are nearest
+    the clip's there."""
+    first, last = max(0, first), min(motion.frames - 1, max(first, last))
+    want = clip.rotations[clip_frame, 1:]
+    have = motion.rotations[first:last + 1, 1:]
+    dots = np.abs(np.sum(have * want[None], axis=-1)).clip(0.0, 1.0)
+    return first + int(np.argmin(np.sum(np.arccos(dots), axis=1)))
+
+
+def retimed(motion: Motion, first: int, last: int, at: int, to: int) -> Motion:
+    """``motion`` with what it plays at frame ``at`` played at frame ``to`` instead, the
+    frames between ``first`` and ``last`` (kept) stretched and squeezed piecewise linearly
+    around it (a reaction timed to its cause)."""
+    first, last = max(0, first), min(motion.frames - 1, last)
+    if not first < to < last or not first < at < last or at == to:
+        return motion
+    frames = np.arange(first, last + 1, dtype=float)
+    source = np.interp(frames, [first, to, last], [first, at, last])
+    k = np.minimum(np.floor(source).astype(int), motion.frames - 2)
+    w = (source - k)[:, None, None]
+    trans = motion.translations.copy()
+    rots = motion.rotations.copy()
+    trans[first:last + 1] = motion.translations[k] * (1 - w) + motion.translations[k + 1] * w
+    a, b = motion.rotations[k], motion.rotations[k + 1]
+    b = np.where(np.sum(a * b, axis=-1, keepdims=True) < 0, -b, b)
+    q = a * (1 - w) + b * w
+    rots[first:last + 1] = q / np.linalg.norm(q, axis=-1, keepdims=True)
+    return replace(motion, translations=trans, rotations=rots)
+
+
+def apart(motion: Motion, other: Motion, touching: tuple = (), rounds: int = 8, margin: float = 0.015,
+          sigma: float = 2.0) -> Motion:
+    """``motion`` with its arms bent out of ``other``'s body wherever the animation check's
+    capsules (:func:`retarget.qa.capsules`) overlap — an arm's bones pushed off by the
+    overlap plus ``margin``, the push eased over a few frames (a Gaussian of ``sigma``
+    frames) and followed by the arm's two-bone chain. ``touching``: (joint of motion, joint
+    of other) contact pairs allowed to touch (:attr:`retarget.qa.Limits.touch`)."""
+    from scipy.ndimage import gaussian_filter1d
+
+    from retarget.qa import Limits, capsules, closest_points
+
+    limits = Limits()
+    so, ro, jo = capsules(other, limits)
+    arms = {side: arm_chain(motion, side) for side in ("left", "right") if guess_roles(motion.skeleton).get(f"{side}_hand") is not None}
+    base = forward_kinematics(motion)
+    offsets = {side: np.zeros((motion.frames, 3)) for side in arms}
+    out = motion
+    for _ in range(rounds):
+        sm, rm, jm = capsules(out, limits)
+        allowed = np.zeros((len(rm), len(ro)))
+        for x, y in touching:
+            allowed += ((jm == x).any(axis=1)[:, None] & (jo == y).any(axis=1)[None, :]) * limits.touch
+        pushed = False
+        for side, (shoulder, elbow, hand) in arms.items():
+            mine = np.flatnonzero(np.isin(jm, [elbow, hand]).any(axis=1))
+            push = np.zeros((motion.frames, 3))
+            for f in range(min(motion.frames, other.frames)):
+                pa, pb = closest_points(sm[f, mine], so[f])
+                d = np.linalg.norm(pa - pb, axis=-1)
+                depth = rm[mine][:, None] + ro[None, :] - allowed[mine] - d
+                k = np.unravel_index(np.argmax(depth), depth.shape)
+                if depth[k] > 0:
+                    away = (pa[k] - pb[k]) / max(float(d[k]), 1e-9)
+                    push[f] = away * (depth[k] + margin)
+            if np.any(push):
+                pushed = True
+                offsets[side] += gaussian_filter1d(push, sigma, axis=0, mode="nearest") * np.sqrt(2 * np.pi) * sigma / 2
+        if not pushed:
+            break
+        out = motion
+        for side, (shoulder, elbow, hand) in arms.items():
+            if np.any(offsets[side]):
+                size = np.linalg.norm(offsets[side], axis=1)
+                weight = np.clip(size / 0.005, 0.0, 1.0)
+                out = two_bone_ik(out, shoulder, elbow, hand, base[0][:, hand] + offsets[side], weight)
+    return out

@@ -16,7 +16,14 @@ Each measure names the frames it happens in, so a failure can be looked at:
   :attr:`Limits.flight` (longer than any real jump's flight), and **sinking** —
   any point of the body below the ground by more than :attr:`Limits.sink`;
 * **interpenetration** — two characters' bodies, as capsules around their bones
-  (:attr:`Limits.limb` radius, :attr:`Limits.trunk` for the spine), overlapping.
+  (:attr:`Limits.limb` radius — the neck, hands and toes too —, :attr:`Limits.trunk` for the
+  spine, :attr:`Limits.head` around the head, from its joint to its top), overlapping; an
+  interaction's contact joints (:class:`Contact`: a slapping hand and the head, two kissing
+  heads) may touch, sinking at most :attr:`Limits.touch` into each other;
+* **contacts missed** — at an interaction's contact frame its contact joints' surfaces farther
+  apart than :attr:`Limits.contact`;
+* **reactions leading their cause** — the receiver's reaction under way (its contact joint
+  moving, relative to its pelvis, faster than :attr:`Limits.stir`) before the contact frame.
 
 Calibration (``python -m bench.animation_check``): the limits are the issue's targets,
 checked against real motion capture under ``../shared/data/mocap`` — every Bandai
@@ -51,6 +58,23 @@ class Limits:
     sink: float = 0.01  # m below the ground
     limb: float = 0.05  # m: capsule radius of a limb bone
     trunk: float = 0.1  # m: capsule radius of a spine bone
+    head: float = 0.09  # m: capsule radius around the head (its joint to its top)
+    touch: float = 0.01  # m: contact joints may sink this far into each other (skin gives)
+    contact: float = 0.03  # m: contact joints' surfaces farther apart than this miss the contact
+    stir: float = 0.3  # m/s: a reaction is under way once its contact joint moves this fast
+
+
+@dataclass(frozen=True)
+class Contact:
+    """An interaction as compiled: role 0's joint meets role 1's at ``frame`` (e.g. the
+    slapper's right hand and the other's head); ``reaction``: the first and last frames of
+    role 1's reaction clip, when role 1 reacts (Slapped) rather than acts alike (Kiss)."""
+
+    interaction: str
+    tracks: tuple  # (role 0's track, role 1's track)
+    joints: tuple  # (role 0's joint role, role 1's), e.g. ("right_hand", "head")
+    frame: int
+    reaction: tuple | None = None
 
 
 @dataclass(frozen=True)
@@ -69,6 +93,9 @@ class Check:
     deepest: float = 0.0  # m below the ground
     touching: dict = field(default_factory=dict)  # other character -> frames interpenetrating
     limits: Limits = Limits()
+    missed: tuple = ()  # contact frames of its interactions whose contact joints do not meet
+    gap: float = 0.0  # m: the gap between contact joints' surfaces at a contact frame farthest from 0 (< 0: sunk)
+    leads: tuple = ()  # frames a reaction of its interactions is under way before the contact
 
     @property
     def sliding_per_s(self) -> float:
@@ -78,7 +105,8 @@ class Check:
     def passes(self) -> bool:
         allowed = self.limits.slides_per_s * self.frames / self.fps + 1e-6  # frames, over the motion's length
         return (len(self.sliding) <= allowed and not self.pops and not self.turns
-                and not self.hovering and not self.sinking and not any(self.touching.values()))
+                and not self.hovering and not self.sinking and not any(self.touching.values())
+                and not self.missed and not self.leads)
 
     def figures(self) -> dict:
         """The figures as report.json holds them (frames as lists; at most 50 listed)."""
@@ -90,7 +118,9 @@ class Check:
                 "fastest_joint_m_per_s": round(self.fastest, 3), "one_frame_turns": listed(self.turns),
                 "hovering_frames": len(self.hovering), "hover_m": round(self.highest, 4),
                 "sinking_frames": len(self.sinking), "sink_m": round(self.deepest, 4),
-                "interpenetration_frames": {k: len(v) for k, v in self.touching.items()}}
+                "interpenetration_frames": {k: len(v) for k, v in self.touching.items()},
+                "contacts_missed": listed(self.missed), "contact_gap_m": round(self.gap, 4),
+                "reaction_lead_frames": listed(self.leads)}
 
     def summary(self) -> str:
         """One line: the figures and whether they pass."""
@@ -98,7 +128,8 @@ class Check:
         return (f"sliding {self.sliding_per_s:.2f} frames/s, pops {len(self.pops)} (fastest joint "
                 f"{self.fastest:.1f} m/s), one-frame turns {len(self.turns)}, hovering {len(self.hovering)} "
                 f"frames (up to {self.highest * 100:.1f} cm), sinking {len(self.sinking)}, interpenetration "
-                f"{touching} frames: {'passes' if self.passes else 'FAILS'}")
+                f"{touching} frames, contacts missed {len(self.missed)}, reaction leading {len(self.leads)} frames: "
+                f"{'passes' if self.passes else 'FAILS'}")
 
 
 def _foot_points(motion: Motion, positions: np.ndarray, ends: dict, ankle: int) -> np.ndarray:
@@ -202,24 +233,32 @@ def _one_frame_turns(root_q: np.ndarray, limit_deg: float) -> list[int]:
     return out
 
 
-def _capsules(motion: Motion, positions: np.ndarray, limits: Limits):
-    """Bones as segments (F, B, 2, 3) with radii (B,): every joint to its parent."""
+def _capsules(motion: Motion, positions: np.ndarray, limits: Limits, ends: dict | None = None):
+    """Bones as segments (F, B, 2, 3) with radii (B,) and each bone's two joints (B, 2):
+    every joint to its parent, and the hands', feet's and head's end sites to their joint
+    (a bone to an end site names its joint twice). The spine's bones are trunk-wide, the
+    head's is :attr:`Limits.head` wide, the neck and the rest limb-wide."""
     sk = motion.skeleton
     roles = guess_roles(sk)
+    head = roles.get("head")
     trunk = set()
-    for end in ("head", "chest"):
-        j = roles.get(end)
-        while j is not None and j >= 0:
-            trunk.add(j)
-            j = int(sk.parents[j])
-    bones = [j for j in range(1, len(sk)) if np.linalg.norm(sk.offsets[j]) > 0.02]
-    seg = np.stack([positions[:, [int(sk.parents[j]) for j in bones]], positions[:, bones]], axis=2)
-    radii = np.array([limits.trunk if j in trunk else limits.limb for j in bones])
-    return seg, radii
+    j = roles.get("chest")
+    while j is not None and j >= 0:
+        trunk.add(j)
+        j = int(sk.parents[j])
+    bones = [(int(sk.parents[j]), j) for j in range(1, len(sk)) if np.linalg.norm(sk.offsets[j]) > 0.02]
+    ends = ends if ends is not None else end_site_positions(motion)
+    tips = [j for j in ends if np.linalg.norm(ends[j][0] - positions[0, j]) > 0.02]
+    seg = np.stack([np.stack([positions[:, a] for a, _ in bones] + [positions[:, j] for j in tips], axis=1),
+                    np.stack([positions[:, b] for _, b in bones] + [ends[j] for j in tips], axis=1)], axis=2)
+    radii = np.array([limits.trunk if b in trunk else limits.limb for _, b in bones]
+                     + [limits.head if j == head else limits.limb for j in tips])
+    return seg, radii, np.array(bones + [(j, j) for j in tips]).reshape(-1, 2)
 
 
-def _segment_distances(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Closest distances between every segment of ``a`` (B1, 2, 3) and of ``b`` (B2, 2, 3)."""
+def closest_points(a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The closest points (B1, B2, 3) of every segment of ``a`` (B1, 2, 3) to every segment
+    of ``b`` (B2, 2, 3): on ``a``'s segment, and on ``b``'s."""
     p, q = a[:, None, 0], b[None, :, 0]
     d1, d2 = a[:, None, 1] - p, b[None, :, 1] - q
     r = p - q
@@ -229,16 +268,36 @@ def _segment_distances(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     s = np.clip((bb * ff - c * ee) / denom, 0.0, 1.0)
     t = np.clip((bb * s + ff) / np.maximum(ee, 1e-12), 0.0, 1.0)
     s = np.clip((bb * t - c) / np.maximum(aa, 1e-12), 0.0, 1.0)
-    return np.linalg.norm(p + d1 * s[..., None] - q - d2 * t[..., None], axis=-1)
+    return p + d1 * s[..., None], q + d2 * t[..., None]
 
 
-def interpenetration(a: Motion, b: Motion, limits: Limits = Limits(), world_a=None, world_b=None) -> list[int]:
-    """Frames in which two characters' capsules overlap (both on one timeline)."""
-    pa = (world_a if world_a is not None else forward_kinematics(a))[0]
-    pb = (world_b if world_b is not None else forward_kinematics(b))[0]
-    sa, ra = _capsules(a, pa, limits)
-    sb, rb = _capsules(b, pb, limits)
+def _segment_distances(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Closest distances between every segment of ``a`` (B1, 2, 3) and of ``b`` (B2, 2, 3)."""
+    x, y = closest_points(a, b)
+    return np.linalg.norm(x - y, axis=-1)
+
+
+def capsules(motion: Motion, limits: Limits = Limits(), world=None):
+    """The body as the check sees it: segments (F, B, 2, 3), radii (B,) and each one's two
+    joints (B, 2) (:func:`_capsules`)."""
+    world = world if world is not None else forward_kinematics(motion)
+    return _capsules(motion, world[0], limits, end_site_positions(motion, world))
+
+
+def interpenetration(a: Motion, b: Motion, limits: Limits = Limits(), world_a=None, world_b=None,
+                     touching: tuple = ()) -> list[int]:
+    """Frames in which two characters' capsules overlap (both on one timeline).
+    ``touching``: (joint of a, joint of b) pairs whose bones may sink :attr:`Limits.touch`
+    into each other (an interaction's contact)."""
+    wa = world_a if world_a is not None else forward_kinematics(a)
+    wb = world_b if world_b is not None else forward_kinematics(b)
+    pa, pb = wa[0], wb[0]
+    sa, ra, ja = _capsules(a, pa, limits, end_site_positions(a, wa))
+    sb, rb, jb = _capsules(b, pb, limits, end_site_positions(b, wb))
     reach = ra[:, None] + rb[None, :]
+    for x, y in touching:
+        allowed = (ja == x).any(axis=1)[:, None] & (jb == y).any(axis=1)[None, :]
+        reach = np.where(allowed, reach - limits.touch, reach)
     frames = []
     for f in range(min(a.frames, b.frames)):
         centre_a, centre_b = pa[f, 0], pb[f, 0]
@@ -249,17 +308,77 @@ def interpenetration(a: Motion, b: Motion, limits: Limits = Limits(), world_a=No
     return frames
 
 
-def check_scene(motions: dict, terrain=None, limits: Limits = Limits(), ground: float | None = 0.0) -> dict:
+def contact_gap(a: Motion, b: Motion, joint_a: int, joint_b: int, frame: int, limits: Limits = Limits(),
+                world_a=None, world_b=None) -> float:
+    """How far apart (m) the surfaces of ``joint_a``'s bones on ``a`` and ``joint_b``'s on
+    ``b`` are at ``frame`` (negative: sunk into each other)."""
+    wa = world_a if world_a is not None else forward_kinematics(a)
+    wb = world_b if world_b is not None else forward_kinematics(b)
+    sa, ra, ja = _capsules(a, wa[0], limits, end_site_positions(a, wa))
+    sb, rb, jb = _capsules(b, wb[0], limits, end_site_positions(b, wb))
+    ka, kb = (ja == joint_a).any(axis=1), (jb == joint_b).any(axis=1)
+    d = _segment_distances(sa[frame, ka], sb[frame, kb]) - ra[ka][:, None] - rb[kb][None, :]
+    return float(d.min())
+
+
+def reaction_onset(motion: Motion, joint: int, first: int, last: int, limits: Limits = Limits(),
+                   world=None) -> int | None:
+    """The frame a reaction gets under way between ``first`` and ``last``: going back from
+    its ``joint``'s fastest moment (relative to the pelvis) to where it moved slower than
+    :attr:`Limits.stir`. None when it never moves that fast."""
+    positions = (world if world is not None else forward_kinematics(motion))[0]
+    pelvis = guess_roles(motion.skeleton).get("pelvis", 0)
+    first, last = max(0, first), min(motion.frames - 1, last)
+    if last - first < 2:
+        return None
+    rel = positions[first:last + 1, joint] - positions[first:last + 1, pelvis]
+    speed = np.linalg.norm(np.diff(rel, axis=0), axis=1) / motion.frame_time  # speed[k]: frame k → k + 1
+    peak = int(np.argmax(speed))
+    if speed[peak] <= limits.stir:
+        return None
+    k = peak
+    while k > 0 and speed[k - 1] > limits.stir:
+        k -= 1
+    return first + k
+
+
+def check_scene(motions: dict, terrain=None, limits: Limits = Limits(), ground: float | None = 0.0,
+                contacts: tuple = ()) -> dict:
     """Every character's :class:`Check` with interpenetration against the others; the
     ground is ``terrain``, else the height ``ground`` (None: each motion's own floor, as
-    for motion capture)."""
+    for motion capture). ``contacts`` (:class:`Contact`): the scene's interactions, whose
+    contact joints may touch and must meet, and whose reactions must not lead the contact
+    (both characters of an interaction get its findings)."""
+    from dataclasses import replace
+
     worlds = {name: forward_kinematics(m) for name, m in motions.items()}
     out = {name: check(m, terrain, limits, ground=ground if terrain is None else None, world=worlds[name])
            for name, m in motions.items()}
+    joints = {name: guess_roles(m.skeleton) for name, m in motions.items()}
     names = list(motions)
     for i, x in enumerate(names):
         for y in names[i + 1:]:
-            frames = interpenetration(motions[x], motions[y], limits, worlds[x], worlds[y])
+            touching = [(joints[x].get(c.joints[k]), joints[y].get(c.joints[1 - k]))
+                        for c in contacts for k in (0, 1) if c.tracks == ((x, y) if k == 0 else (y, x))]
+            frames = interpenetration(motions[x], motions[y], limits, worlds[x], worlds[y],
+                                      tuple(t for t in touching if None not in t))
             out[x].touching[y] = tuple(frames)
             out[y].touching[x] = tuple(frames)
+    for c in contacts:
+        ta, tb = c.tracks
+        if ta not in motions or tb not in motions:
+            continue
+        ja, jb = joints[ta].get(c.joints[0]), joints[tb].get(c.joints[1])
+        frame = min(int(c.frame), motions[ta].frames - 1, motions[tb].frames - 1)
+        missed, gap, leads = (), 0.0, ()
+        if ja is not None and jb is not None:
+            gap = contact_gap(motions[ta], motions[tb], ja, jb, frame, limits, worlds[ta], worlds[tb])
+            missed = (frame,) if gap > limits.contact else ()
+        if c.reaction is not None and jb is not None:
+            onset = reaction_onset(motions[tb], jb, *c.reaction, limits, worlds[tb])
+            leads = tuple(range(onset, frame)) if onset is not None else ()
+        for name in (ta, tb):
+            got = out[name]
+            out[name] = replace(got, missed=got.missed + missed, gap=gap if abs(gap) > abs(got.gap) else got.gap,
+                                leads=got.leads + leads)
     return out

@@ -130,7 +130,7 @@ def test_builtin_interactions_carry_the_thesis_constraints():
     inter = {i.name: i for i in builtin().interactions}
     assert inter["Slap"].constraints == ("D(0, 1, Personal)", "V(0, 1, 0.5)", "V(1, 0, 0.5)")
     assert inter["Kiss"].constraints == ("D(0, 1, Intimate)", "V(0, 1, 0.5)", "V(1, 0, 0.5)")
-    assert inter["Slap"].contact == ("right_hand", "head") and inter["Kiss"].contact == ()
+    assert inter["Slap"].contact == ("right_hand", "head") and inter["Kiss"].contact == ("head", "head")
 
 
 def _manifest(tmp_path, constraints):
@@ -255,19 +255,19 @@ def test_builtin_slap_is_recognised_only_as_an_interaction():
 
 def test_the_slapping_hand_meets_the_head():
     """Placement and contact (§6.2.2): the characters are brought within reach, and at the
-    contact frame the slapper's right hand is on the slapped character's head (its surface,
-    within 2 cm)."""
-    from doodle.app.pipeline import HEAD_RADIUS, compile_doodle
+    contact frame the slapper's right hand is on the slapped character's head (the surfaces
+    of their capsules within 1 cm)."""
+    from doodle.app.pipeline import compile_doodle
     from retarget.analysis import guess_roles
-    from retarget.skeleton import forward_kinematics
+    from retarget.qa import contact_gap
 
     a, b = compile_doodle(scene(["T_N_Z", "T_Z"], [], 0.3))
+    (contact,) = a.contacts
     k = next(k for k, s in enumerate(a.segments) if getattr(s, "interaction", None) == "Slap")
-    f0, f1 = a.frame_ranges[k]
-    frame = f0 + int(round(0.6 * (f1 - f0)))
-    hand = forward_kinematics(a.motion)[0][frame, guess_roles(a.motion.skeleton)["right_hand"]]
-    head = forward_kinematics(b.motion)[0][frame, guess_roles(b.motion.skeleton)["head"]]
-    assert abs(np.linalg.norm(hand - head) - HEAD_RADIUS) < 0.02
+    assert a.frame_ranges[k][0] < contact.frame < a.frame_ranges[k][1]
+    gap = contact_gap(a.motion, b.motion, guess_roles(a.motion.skeleton)["right_hand"],
+                      guess_roles(b.motion.skeleton)["head"], contact.frame)
+    assert abs(gap) < 0.01
 
 
 def test_a_two_character_slap_scene_compiles_with_the_interaction(tmp_path, capsys):
@@ -277,7 +277,8 @@ def test_a_two_character_slap_scene_compiles_with_the_interaction(tmp_path, caps
 
     from doodle.app.cli.main import main
     from doodle.input.fileformat import write_doodle
-    from doodle.app.pipeline import MEET_DISTANCE
+    from doodle.app.pipeline import meet_distance
+    from doodle.app.pipeline import load_for_compile
 
     path = tmp_path / "slap.doodle"
     write_doodle(path, scene(["T_N_Z", "T_Z"], [], 0.3))
@@ -293,7 +294,10 @@ def test_a_two_character_slap_scene_compiles_with_the_interaction(tmp_path, caps
 
     roots = [read_bvh(out / f"{tr}.bvh", unit=1.0).translations[0, 0] for tr in ("c0", "c1")]
     gap = np.linalg.norm((roots[1] - roots[0])[[0, 2]])
-    assert gap == pytest.approx(MEET_DISTANCE, abs=0.01)  # 0.3 m of prop (2.5 m) brought within reach
+    actions = load_for_compile()
+    want = meet_distance(next(i for i in actions.library.interactions if i.name == "Slap"), "Slap", "Slapped", actions)
+    assert 0.4 < want < 0.7 and gap == pytest.approx(want, abs=0.01)  # 0.3 m of prop (2.5 m) brought within reach
+    assert [i["interaction"] for i in report["interactions"]] == ["Slap"]
     capsys.readouterr()
     assert main(["recognize", str(path)]) == 0
     assert "Slap [Slap, role 0]" in capsys.readouterr().out

@@ -31,10 +31,12 @@ def test_compile_report_shape(tmp_path, capsys):
     out = tmp_path / "demo"
     assert main(["compile", str(DEMO), "-o", str(out), "--no-effort"]) == 0
     report = json.loads((out / "report.json").read_text())
-    assert set(report) == {"file", "fps", "duration_s", "terrain", "tracks"}
+    assert set(report) == {"file", "fps", "duration_s", "terrain", "tracks", "interactions"}
+    assert report["interactions"] == []  # one character: no interaction, no contact
     track = report["tracks"]["c0"]
     assert set(track) == {"bvh", "frames", "segments", "transitions", "metrics", "check"}
     assert isinstance(track["check"]["passes"], bool) and isinstance(track["check"]["sliding_frames"], list)
+    assert isinstance(track["check"]["contacts_missed"], list) and isinstance(track["check"]["reaction_lead_frames"], list)
     assert Path(track["bvh"]).exists() and track["frames"] > 0
     assert set(track["metrics"]) >= {"foot_skating_m_per_s", "ground_penetration_m", "root_deviation_m",
                                      "transition_smoothness"}

@@ -45,6 +45,7 @@ class Animation:
     styles: list = None  # per segment, the (L_t, L_w) applied
     efforts: list = None  # per segment, the recognised Effort (laban.classify.Quality) or None
     sample_times: np.ndarray = None  # s: the doodle's sample times the segments index (walks inserted: longer)
+    contacts: tuple = ()  # the scene's interactions as compiled (retarget.qa.Contact), on every track
 
 
 @dataclass(frozen=True)
@@ -105,7 +106,7 @@ def compile_doodle(doodle: Doodle, library_dir=None, use_builtin: bool = True, p
     skeleton, rest = _compile_skeleton(actions.library, actions.user, actions.clips)
     total, done = sum(len(segs) for _, segs in recognised.values()), 0
     origin = doodle.tracks[0].p[0]  # one origin for the scene: characters keep their relative places
-    results, missing = [], {}
+    results, missing, chosen = [], {}, {}
     for track in doodle.tracks:
         tokens, segments = recognised[track.name]
         choices = []
@@ -115,6 +116,7 @@ def compile_doodle(doodle: Doodle, library_dir=None, use_builtin: bool = True, p
             if progress:
                 done += 1
                 progress(done, total)
+        chosen[track.name] = choices
         results.append(animate(track, tokens, segments, choices, times, skeleton, rest, scale, terrain, origin,
                                fps, jump_arc, retime, style, pin))
         for seg, c in zip(segments, choices):
@@ -125,8 +127,9 @@ def compile_doodle(doodle: Doodle, library_dir=None, use_builtin: bool = True, p
         warnings.warn(f"the library has no clip of {action} on its skeleton: {len(where)} segment"
                       f"{'s' * (len(where) != 1)} hold{'s' * (len(where) == 1)} the rest pose ({', '.join(where[:4])}"
                       f"{', …' if len(where) > 4 else ''})")
-    _contacts(results, recognised, {i.name: i for i in actions.library.interactions})
-    return results
+    contacts = _contacts(results, recognised, {i.name: i for i in actions.library.interactions}, chosen)
+    _apart(results, recognised, contacts)
+    return [replace(r, contacts=contacts) for r in results]
 
 
 def scene(doodle: Doodle, actions: Actions, params: SegmenterParams, threshold: float, scale: float):
@@ -144,7 +147,7 @@ def scene(doodle: Doodle, actions: Actions, params: SegmenterParams, threshold: 
         if placed is not doodle:
             doodle = placed
             recognised = recognize(doodle, actions.compiled, params, threshold)
-    met = meet(doodle, recognised, scale, skip=set(placements))
+    met = meet(doodle, recognised, scale, skip=set(placements), actions=actions)
     if met is not doodle:  # characters brought within reach: read the scene again
         doodle = met
         recognised = recognize(doodle, actions.compiled, params, threshold)
@@ -321,66 +324,232 @@ def _pair_placement(interaction) -> tuple[float, float, float]:
     return placement(*motions)
 
 
-MEET_DISTANCE = 0.6  # m between two interacting characters' roots: within a hand's reach (§6.2.2)
-HEAD_RADIUS = 0.09  # m: the hand meets the head's surface, not its centre
-MEET_S = 0.8  # s: the receiver steps in over this long before the interaction
+MEET_DISTANCE = 0.6  # m between two interacting characters' roots without a contact to meet (§6.2.2)
+HEAD_RADIUS = 0.09  # m: the head's capsule radius (retarget.qa.Limits.head): contacts meet its surface
+LIMB_RADIUS = 0.05  # m: a limb's capsule radius (retarget.qa.Limits.limb)
+CLEARANCE = 0.35  # m: interacting characters' roots never closer (two 10 cm trunks and room to move)
+MEET_S = 0.8  # s: the shortest step in of a receiver that has walked before the interaction
+WALK_SPEED = 1.0  # m/s: ... and its pace, so a longer step takes longer
 
 
-def meet(doodle: Doodle, recognised: dict, scale: float, skip=frozenset()) -> Doodle:
+def meet(doodle: Doodle, recognised: dict, scale: float, skip=frozenset(), actions: Actions | None = None) -> Doodle:
     """Interaction placement (§6.2.2, simplified): for each recognised two-character
-    interaction whose characters stand farther apart than a hand's reach, the second
-    character (role 1) steps towards the first over the :data:`MEET_S` before its role
-    begins (a minimum-jerk move in the doodle, read back as an implicit walk where there is
-    time for one) and stays at :data:`MEET_DISTANCE` from it."""
-    from doodle.core.profiles import min_jerk
+    interaction the second character (role 1) stands in front of the first, facing it, at
+    the distance where their contact joints meet (:func:`meet_distance`; else
+    :data:`MEET_DISTANCE`) — measured from where both really are when role 0's part begins,
+    after their earlier walks (:func:`ground_paths`). A receiver that has not walked before
+    is moved and turned from the start; one that has steps in before (a minimum-jerk move in
+    the doodle, read back as an implicit walk at about :data:`WALK_SPEED`)."""
+    from doodle.app.placement import stand_in_front
 
     tracks = {tr.name: tr for tr in doodle.tracks}
+    interactions = {i.name: i for i in actions.library.interactions} if actions is not None else {}
     changed = False
     for ta, a, tb, b in interaction_pairs(recognised):
         if a.interaction in skip:  # placed by its own configuration (doodle.app.placement)
             continue
         A, B = tracks[ta], tracks[tb]
-        i = min(b.start, len(B.t) - 1)
-        j = int(np.argmin(np.abs(A.t - B.t[i])))
-        gap = (A.p[j] - B.p[i]) * np.array([1.0, 0.0, 1.0])
-        far, want = float(np.linalg.norm(gap)), MEET_DISTANCE / scale
-        if far <= want:
+        j = min(a.start, len(A.t) - 1)
+        i = int(np.argmin(np.abs(B.t - A.t[j])))
+        origin = doodle.tracks[0].p[0]
+        path_a, heading_a = ground_paths(A, recognised[ta][1], actions, scale, origin)
+        path_b, heading_b = ground_paths(B, recognised[tb][1], actions, scale, origin)
+        want = meet_distance(interactions.get(a.interaction), a.action, b.action, actions)
+        gap = (path_b[i] - path_a[j]) * [1.0, 0.0, 1.0]
+        front = np.array([np.sin(heading_a[j]), 0.0, np.cos(heading_a[j])])
+        if (np.linalg.norm(gap - want * front) < 0.05
+                and abs((heading_b[i] - heading_a[j]) % (2 * np.pi) - np.pi) < np.radians(10)):
             continue
-        shift = gap / far * (far - want)
-        u = np.clip((B.t - (B.t[i] - MEET_S)) / MEET_S, 0.0, 1.0) if i > 0 else np.ones(len(B.t))
-        tracks[tb] = replace(B, p=B.p + min_jerk(u)[:, None] * shift)
+        still = not any(_travels(s, actions) for s in recognised[tb][1] if s.start < i)
+        walk_s = max(MEET_S, float(np.linalg.norm(gap - want * front)) / WALK_SPEED)
+        tracks[tb] = stand_in_front(B, i, path_a[j], heading_a[j], path_b[i], heading_b[i], want, scale, still,
+                                    walk_s)
         changed = True
     return replace(doodle, tracks=tuple(tracks[tr.name] for tr in doodle.tracks)) if changed else doodle
 
 
-def _contacts(results: list, recognised: dict, interactions: dict) -> None:
-    """For each recognised interaction with a ``contact`` (e.g. the slapper's right hand and
-    the other's head), role 0's hand reaches role 1's joint 60 % into its segment (about
-    the end of its execution; retarget.contact), where it can — a head is met on its
-    surface."""
+def _travels(seg, actions: Actions | None) -> bool:
+    """Whether a recognised segment moves its character (a walk, a jump)."""
+    library = actions.library if actions is not None else None
+    if library is None or seg.action not in library.names:
+        return seg.action in ("Walk", "Walk Back", "Side Walk Left", "Side Walk Right", "Jump", "Flip")
+    return not library.action(seg.action).in_place
+
+
+def ground_paths(track, segments, actions: Actions | None, scale: float, origin) -> tuple[np.ndarray, np.ndarray]:
+    """Where a character really stands (n, 3, world metres, the scene's ``origin`` at the
+    world's) and its heading (n, radians) at each of its samples, as the compile will lay
+    it: in-place actions holding their spot, walks carrying it (retarget.trajectory)."""
+    from retarget.trajectory import Span, world_path
+
+    spans = []
+    for seg in segments:
+        clips = actions.clips.get(seg.action, []) if actions is not None else []
+        library = actions.library if actions is not None else None
+        if clips and library is not None and seg.action in library.names:
+            span, _ = _span(seg, track, Choice(clips[0], library.action(seg.action), True, (0.0, 0.0), None))
+        else:
+            span = Span(seg.action, float(track.t[seg.start]), float(track.t[min(seg.end, len(track.t) - 1)]),
+                        seg.start, seg.end, not _travels(seg, actions), False, False, (0.0, 1.0), 0.0)
+        spans.append(span)
+    front = quat.rotate(track.q[:1], np.array([[0.0, 0.0, 1.0]]))[0]
+    return world_path(track.t, track.p, spans, scale, None, "clip", origin, float(np.arctan2(front[0], front[2])))
+
+
+def _contact_clips(interaction, action_a: str, action_b: str, clips: dict):
+    """(clip, joint, reference frame) per role of an interaction with a contact: role 0's
+    contact frame (:func:`retarget.contact.contact_frame`), and role 1's — its own contact
+    frame when it acts alike (a kiss), else the frame its reaction gets under way. None
+    when a role has no clip or no such joint."""
     from retarget.analysis import guess_roles
-    from retarget.contact import reach
-    from retarget.skeleton import forward_kinematics
+    from retarget.contact import contact_frame
+    from retarget.qa import reaction_onset
+
+    if interaction is None or len(interaction.contact) != 2:
+        return None
+    out = []
+    for k, (clip, name) in enumerate(zip(clips, interaction.contact)):
+        joint = guess_roles(clip.motion.skeleton).get(name) if clip is not None else None
+        if joint is None:
+            return None
+        if k == 0 or action_b == action_a:
+            frame = contact_frame(clip.motion, clip.stages, joint)
+        else:
+            lo, hi = clip.stages.bounds()["execution"]
+            frame = reaction_onset(clip.motion, joint, lo, clip.motion.frames - 1)
+            frame = lo if frame is None else frame
+        out.append((clip, joint, frame))
+    return out
+
+
+def meet_distance(interaction, action_a: str, action_b: str, actions: Actions | None) -> float:
+    """How far in front of role 0 role 1's root stands (m) so that, at the contact frame,
+    their contact joints meet from in front: role 0's joint as far forward as its clip puts
+    it then, role 1's head (say) as far forward as its clip puts it, their surfaces
+    touching (:data:`HEAD_RADIUS`, :data:`LIMB_RADIUS`); never under :data:`CLEARANCE`.
+    :data:`MEET_DISTANCE` for an interaction without a contact."""
+    clips = [(actions.clips.get(name) or [None])[0] if actions is not None else None for name in (action_a, action_b)]
+    found = _contact_clips(interaction, action_a, action_b, clips)
+    if found is None:
+        return MEET_DISTANCE
+    (ca, ja, fa), (cb, jb, fb) = found
+    oa, ob = _front_point(ca.motion, ja, fa), _front_point(cb.motion, jb, fb)
+    radii = sum(HEAD_RADIUS if name == "head" else LIMB_RADIUS for name in interaction.contact)
+    side = oa[0] + ob[0]  # role 1 faces role 0: its right is role 0's left
+    depth = float(np.sqrt(max(radii ** 2 - side ** 2, 0.0)))
+    return max(float(oa[2] + ob[2]) + depth, CLEARANCE)
+
+
+def _front_point(motion, joint: int, frame: int) -> np.ndarray:
+    """The farther forward of a joint and its end site (a fingertip, the top of the head)
+    at ``frame``, in the clip's ground frame (right, up, front) from its start
+    (retarget.contact.body_offset)."""
+    from retarget.contact import body_offset, facing_frame
+    from retarget.skeleton import end_site_positions, forward_kinematics
+
+    world = forward_kinematics(motion)
+    points = [body_offset(motion, joint, frame, world)]
+    tip = end_site_positions(motion, world).get(joint)
+    if tip is not None:
+        points.append((tip[frame] - world[0][0, 0] * [1.0, 0.0, 1.0]) @ facing_frame(motion, world)[frame])
+    return max(points, key=lambda p: p[2])
+
+
+def _contacts(results: list, recognised: dict, interactions: dict, chosen: dict) -> tuple:
+    """For each recognised interaction with a ``contact`` (e.g. the slapper's right hand and
+    the other's head): the contact frame is where role 0's clip reaches farthest forward in
+    its execution (:func:`retarget.contact.contact_frame`, as played); role 1's part is
+    retimed so its reaction gets under way there, not before (or, acting alike — a kiss —
+    so its own contact frame falls there); a hand then meets the other's joint on its
+    surface, from where it comes (retarget.contact.reach). Returns the interactions as
+    compiled (:class:`retarget.qa.Contact`)."""
+    from retarget.contact import playing_frame, retimed
+    from retarget.qa import Contact
 
     by_track = {r.track: k for k, r in enumerate(results)}
+    out = []
     for ta, a, tb, b in interaction_pairs(recognised):
-        contact = interactions.get(a.interaction).contact if a.interaction in interactions else ()
-        if not contact or not contact[0].endswith("_hand"):
-            continue
+        interaction = interactions.get(a.interaction)
         ra, rb = results[by_track[ta]], results[by_track[tb]]
-        index = next((k for k, s in enumerate(ra.segments) if s is a or (s.first, s.action) == (a.first, a.action)),
-                     None)
-        head = guess_roles(rb.motion.skeleton).get(contact[1])
-        if index is None or head is None or not ra.frame_ranges:
+        ia, ib = _index_of(ra.segments, a), _index_of(rb.segments, b)
+        if interaction is None or ia is None or ib is None or not ra.frame_ranges:
             continue
-        f0, f1 = ra.frame_ranges[index]
-        frame = f0 + int(round(0.6 * (f1 - f0)))
-        centre = forward_kinematics(rb.motion)[0][frame, head]
-        hand = forward_kinematics(ra.motion)[0][frame, guess_roles(ra.motion.skeleton)[contact[0]]]
-        towards = (hand - centre) / max(float(np.linalg.norm(hand - centre)), 1e-9)
-        surface = HEAD_RADIUS if contact[1] == "head" else 0.0
-        side = contact[0].split("_")[0]
-        results[by_track[ta]] = replace(ra, motion=reach(ra.motion, centre + surface * towards, frame, side))
+        choices = (chosen[ta][ia], chosen[tb][ib])
+        found = _contact_clips(interaction, a.action, b.action,
+                               [c.clip if c.on_skeleton else None for c in choices])
+        if found is None:
+            continue
+        (ca, ja, fa), (cb, jb, fb) = found
+        f0, f1 = ra.frame_ranges[ia]
+        g0, g1 = rb.frame_ranges[ib]
+        frame = playing_frame(ra.motion, ca.motion, fa, f0, f1)
+        mutual = a.action == b.action
+        there = playing_frame(rb.motion, cb.motion, fb, g0, g1)
+        if there < frame or (mutual and there != frame):
+            last = min(rb.motion.frames - 1, max(g1, frame + (g1 - there)))
+            rb = replace(rb, motion=retimed(rb.motion, g0, last, there, frame))
+            results[by_track[tb]] = rb
+        if interaction.contact[0].endswith("_hand"):
+            results[by_track[ta]] = replace(ra, motion=_touch(ra.motion, rb.motion, interaction.contact, frame))
+        out.append(Contact(a.interaction, (ta, tb), tuple(interaction.contact), int(frame),
+                           None if mutual else (int(g0), int(g1))))
+    return tuple(out)
+
+
+def _apart(results: list, recognised: dict, contacts: tuple) -> None:
+    """Interacting characters' arms bent out of each other's bodies (retarget.contact.apart):
+    the receiver's first, then role 0's; contact joints may touch."""
+    from retarget.analysis import guess_roles
+    from retarget.contact import apart
+
+    by_track = {r.track: k for k, r in enumerate(results)}
+    for ta, _, tb, _ in interaction_pairs(recognised):
+        ka, kb = by_track[ta], by_track[tb]
+        joints = next((c.joints for c in contacts if c.tracks == (ta, tb)), None)
+        ra, rb = guess_roles(results[ka].motion.skeleton), guess_roles(results[kb].motion.skeleton)
+        pair = (ra.get(joints[0]), rb.get(joints[1])) if joints else (None, None)
+        results[kb] = replace(results[kb], motion=apart(results[kb].motion, results[ka].motion,
+                                                        ((pair[1], pair[0]),) if None not in pair else ()))
+        results[ka] = replace(results[ka], motion=apart(results[ka].motion, results[kb].motion,
+                                                        (pair,) if None not in pair else ()))
+
+
+def _index_of(segments, seg) -> int | None:
+    return next((k for k, s in enumerate(segments) if s is seg or (s.first, s.action) == (seg.first, seg.action)),
+                None)
+
+
+def _touch(motion, other, contact, frame: int, rounds: int = 4):
+    """``motion``'s hand (``contact[0]``) bent to meet ``other``'s ``contact[1]`` at
+    ``frame`` on its surface, coming from where the hand is: its target moved by the gap
+    the animation check measures (retarget.qa.contact_gap) until they touch."""
+    from retarget.analysis import guess_roles
+    from retarget.contact import reach
+    from retarget.qa import contact_gap
+    from retarget.skeleton import forward_kinematics
+
+    from retarget.skeleton import end_site_positions
+
+    hand = guess_roles(motion.skeleton)[contact[0]]
+    joint = guess_roles(other.skeleton).get(contact[1])
+    if joint is None:
+        return motion
+    world = forward_kinematics(other)
+    top = end_site_positions(other, world).get(joint)
+    centre = world[0][frame, joint] if top is None else (world[0][frame, joint] + top[frame]) / 2
+    side = contact[0].split("_")[0]
+    now = forward_kinematics(motion)[0][frame, hand]
+    towards = (now - centre) * [1.0, 0.0, 1.0]  # the hand comes at it level, from where it is
+    towards = towards / max(float(np.linalg.norm(towards)), 1e-9)
+    target = centre + (HEAD_RADIUS + LIMB_RADIUS) * towards
+    out = reach(motion, target, frame, side)
+    for _ in range(rounds):
+        gap = contact_gap(out, other, hand, joint, frame, world_b=world)
+        if abs(gap) < 0.004:
+            break
+        target = target - (gap + 0.002) * towards
+        out = reach(motion, target, frame, side)
+    return out
 
 
 def gesture_timing(track, span) -> tuple[np.ndarray, np.ndarray] | None:

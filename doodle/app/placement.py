@@ -143,3 +143,28 @@ def _slerp(q0, q1, u) -> np.ndarray:
 
 def _wrap(angle: float) -> float:
     return float((angle + np.pi) % (2 * np.pi) - np.pi)
+
+
+def stand_in_front(track: Track, at: int, where, heading: float, here, facing: float, distance: float,
+                   scale: float, still: bool, walk_s: float) -> Track:
+    """Role 1's track moved so that at sample ``at`` its root stands ``distance`` metres in
+    front of role 0 — at ``where`` (world metres) heading ``heading`` (radians about +y, 0
+    facing +z) then — turned to face it. ``here`` and ``facing`` are where role 1 stands and
+    how it is turned at ``at`` (world), after whatever it did before. A character that has
+    not travelled before (``still``) is moved and turned from its first sample, the whole
+    track turned rigidly about its place (its own gestures read as before); one that has
+    steps there over the ``walk_s`` before ``at`` (an implicit walk), keeping its turn."""
+    front = np.array([np.sin(heading), 0.0, np.cos(heading)])
+    target = np.asarray(where, dtype=float) * [1.0, 0.0, 1.0] + distance * front
+    shift = (target - np.asarray(here, dtype=float) * [1.0, 0.0, 1.0]) / scale
+    p, q = track.p.copy(), track.q.copy()
+    if still:
+        turn = _wrap(heading + np.pi - facing)
+        yaw = Rotation.from_rotvec(UP * turn)
+        pivot = p[at] * [1.0, 0.0, 1.0]
+        p = yaw.apply(p - pivot) + pivot + shift
+        q = (yaw * Rotation.from_quat(q)).as_quat()
+        return replace(track, p=p, q=q)
+    start = float(track.t[at]) - walk_s
+    u = np.clip((track.t - start) / max(walk_s, 1e-9), 0.0, 1.0)
+    return replace(track, p=p + min_jerk(u)[:, None] * shift)

@@ -53,7 +53,8 @@ def compiled(file, fps: float, terrain: str | None, results: list, bvh_paths: di
              checks: dict | None = None) -> dict:
     """``report.json`` of ``doodle compile``: per track its BVH, segments (with the clip
     used, the Laban quality applied and what the effort model said), transitions,
-    motion-quality metrics and the animation check (:mod:`retarget.qa`)."""
+    motion-quality metrics and the animation check (:mod:`retarget.qa`); and the scene's
+    interactions as compiled (``interactions``: what ``doodle qa`` checks contacts with)."""
     report = {"file": str(file), "fps": fps,
               "duration_s": round(float(results[0].sample_times[-1] - results[0].sample_times[0]), 6),
               "terrain": terrain or "flat", "tracks": {}}
@@ -72,4 +73,39 @@ def compiled(file, fps: float, terrain: str | None, results: list, bvh_paths: di
                                      "metrics": metrics[r.track]}
         if checks is not None:
             report["tracks"][r.track]["check"] = checks[r.track].figures()
+    report["interactions"] = [contact_entry(c) for c in (results[0].contacts if results else ())]
     return report
+
+
+def contact_entry(c) -> dict:
+    """One interaction as compiled (retarget.qa.Contact): its tracks by role, contact joints,
+    contact frame and, when role 1 reacts, its reaction's first and last frames."""
+    return {"interaction": c.interaction, "tracks": list(c.tracks), "contact": list(c.joints), "frame": int(c.frame),
+            "reaction": None if c.reaction is None else [int(f) for f in c.reaction]}
+
+
+def read_contacts(report: dict, where: str) -> tuple:
+    """The interactions of a report.json (:func:`contact_entry`) back as
+    retarget.qa.Contact; a malformed entry is a DoodleError naming it."""
+    from doodle.core.errors import DoodleError
+    from retarget.qa import Contact
+
+    entries = report.get("interactions", [])
+    if not isinstance(entries, list):
+        raise DoodleError(f"{where}: 'interactions' must be a list")
+    out = []
+    for k, e in enumerate(entries, 1):
+        try:
+            tracks, joints, frame = e["tracks"], e["contact"], e["frame"]
+            reaction = e.get("reaction")
+            ok = (len(tracks) == 2 and len(joints) == 2 and all(isinstance(x, str) for x in [*tracks, *joints])
+                  and isinstance(frame, int) and not isinstance(frame, bool) and frame >= 0
+                  and (reaction is None or (len(reaction) == 2 and all(isinstance(f, int) for f in reaction))))
+        except (KeyError, TypeError, AttributeError):
+            ok = False
+        if not ok:
+            raise DoodleError(f"{where}: interactions #{k}: needs 'tracks' and 'contact' (two names each), "
+                              f"'frame' (a frame number) and 'reaction' (null or [first, last])")
+        out.append(Contact(str(e.get("interaction", "")), tuple(tracks), tuple(joints), frame,
+                           None if reaction is None else tuple(reaction)))
+    return tuple(out)

@@ -1,6 +1,7 @@
 """``doodle qa OUTDIR``: the animation check (:mod:`retarget.qa`) of a compiled scene —
-feet sliding, pops, one-frame turns, hovering and sinking, characters interpenetrating —
-each with the frames it happens in."""
+feet sliding, pops, one-frame turns, hovering and sinking, characters interpenetrating,
+interaction contacts missed and reactions leading their cause (from report.json's
+``interactions``) — each with the frames it happens in."""
 
 from __future__ import annotations
 
@@ -30,27 +31,32 @@ def cmd_qa(args) -> int:
     if not folder.is_dir():
         raise DoodleError(f"{folder}: not a folder (give what `doodle compile -o` wrote)")
     report_path = folder / "report.json"
-    spec, ground = args.terrain, 0.0
+    spec, ground, contacts = args.terrain, 0.0, ()
     if report_path.exists():
         try:
             report = json.loads(report_path.read_text(encoding="utf-8"))
             paths = [Path(t["bvh"]) for t in report["tracks"].values()]
             paths = [p if p.exists() else folder / p.name for p in paths]
             spec = spec or (report.get("terrain") if report.get("terrain") != "flat" else None)
+            interactions = report.get("interactions", [])
         except (OSError, ValueError, KeyError, TypeError, AttributeError) as e:
             raise DoodleError(f"{report_path}: not a report of `doodle compile` ({e})") from None
+        from doodle.app.report import read_contacts
+
+        contacts = read_contacts({"interactions": interactions}, str(report_path))
     else:  # not compiled here: each clip's floor is where its feet rest
         paths, ground = sorted(folder.glob("*.bvh")), None
     if not paths:
         raise DoodleError(f"{folder}: no BVH files to check")
     motions = {p.stem: read_bvh(p) for p in paths}
-    checks = check_scene(motions, parse_terrain(spec) if spec else None, ground=ground)
+    checks = check_scene(motions, parse_terrain(spec) if spec else None, ground=ground, contacts=contacts)
     for name, c in checks.items():
         print(f"{folder / (name + '.bvh')}: {c.frames} frames at {c.fps:g} fps")
         print(f"  {c.summary()}")
         if args.verbose:
             for what, frames in (("sliding", c.sliding), ("pops", c.pops), ("one-frame turns", c.turns),
-                                 ("hovering", c.hovering), ("sinking", c.sinking),
+                                 ("hovering", c.hovering), ("sinking", c.sinking), ("contacts missed", c.missed),
+                                 ("reaction leading its cause", c.leads),
                                  *((f"interpenetrating {k}", v) for k, v in c.touching.items())):
                 if frames:
                     print(f"    {what}: frames {_ranges(frames)}")
