@@ -196,7 +196,8 @@ def _ground(terrain, xz: np.ndarray) -> np.ndarray:
     return np.zeros(len(xz)) if terrain is None else terrain.height(xz)
 
 
-STEP_SPEED = 2.0  # m/s: a foot stepping to a new spot on its own takes at least distance / this
+STEP_SPEED = 3.0  # m/s: a foot's step to a new spot takes at least its length / this (swinging feet
+# peak at 4–5 m/s in real walks)
 STEP_LIFT = 0.05  # m: a foot moved to a new spot lifted less than this (steps lift the ankle 9–14 cm) is shuffled: it is given a step
 STEP_APEX = (0.04, 0.10)  # m: the apex of a given step, half its length, within these
 
@@ -206,8 +207,9 @@ def _pins(ankle: np.ndarray, contact: np.ndarray, fade: int, terrain, standing: 
     """One foot's targets (F, 3), weights (F,) and standing weights (F,): held at its landing
     spot over each contact interval (a new spot once the body has left it more than
     :data:`REACH` behind); between two spots, a foot that the blended clips shuffle along
-    the floor (lifted less than :data:`STEP_LIFT`) steps instead — lifted in an arc, over
-    at least the time a step of that length takes (borrowed from the stances either side);
+    the floor (lifted less than :data:`STEP_LIFT`) or fling there (faster than
+    :data:`STEP_SPEED`) steps instead — lifted in an arc, over at least the time a step of
+    that length takes (borrowed from the stances either side);
     on uneven ground (``rise``: the ground under the foot above the ground under the root)
     raised by the ground under it elsewhere."""
     frames = len(ankle)
@@ -231,9 +233,9 @@ def _pins(ankle: np.ndarray, contact: np.ndarray, fade: int, terrain, standing: 
         length = float(np.linalg.norm((b[2] - a[2])[[0, 2]]))
         lo, hi = a[1], b[0]  # the gap: frames [lo, hi) between the two stances
         lifted = float((height[lo:hi] - a[2][1]).max()) if hi > lo else 0.0
-        if length < 0.05 or lifted >= STEP_LIFT:
-            continue
         need = int(np.ceil(length / STEP_SPEED * fps)) + 1
+        if length < 0.05 or (lifted >= STEP_LIFT and hi - lo >= need):
+            continue
         while hi - lo < need and (a[1] - a[0] > 1 or b[1] - b[0] > 1):
             if a[1] - a[0] > 1 and (hi - lo) % 2 == 0:
                 a[1] -= 1

@@ -43,6 +43,7 @@ class Placed:
     gesture: tuple | None = None  # (times, fraction): gesture-based retiming, §5.3.3
     contacts: np.ndarray | None = None  # (clip frames, feet) bool: where the clip's feet stand
     pace: tuple | None = None  # (fraction of the span, clip time): a one-shot's retiming (:func:`paced`)
+    phase: float = 0.0  # m of the clip's travel a distance-driven cycle starts at (:func:`entry_phase`)
 
 
 def travel_curve(motion: Motion, pelvis: int) -> np.ndarray:
@@ -86,7 +87,7 @@ def clip_time(placed: Placed, t: np.ndarray) -> np.ndarray:
         length = curve[-1]
         if length > 1e-6:
             s_t = np.interp(t, placed.times, placed.progress)
-            rem = np.mod(s_t, length)
+            rem = np.mod(s_t + placed.phase, length)
             clip_times = np.arange(m.frames) * m.frame_time
             return np.interp(rem, curve, clip_times)
     if placed.cycles > 0:
@@ -97,6 +98,46 @@ def clip_time(placed: Placed, t: np.ndarray) -> np.ndarray:
         return np.interp(u, *placed.pace)
     end = (m.frames - 1) * m.frame_time if placed.clip_out is None else placed.clip_out
     return placed.clip_in + u * (end - placed.clip_in)
+
+
+def _feet_around_pelvis(motion: Motion, pelvis: int, feet: list[int]) -> np.ndarray:
+    """(F, feet, 2): each foot's horizontal place relative to the pelvis, in the pelvis's own
+    heading (so clips facing different ways compare)."""
+    positions, rotations = forward_kinematics(motion)
+    from doodle.core import quat
+
+    front = quat.rotate(rotations[:, pelvis], np.tile([0.0, 0.0, 1.0], (motion.frames, 1)))
+    yaw = np.arctan2(front[:, 0], front[:, 2])
+    rel = positions[:, feet][:, :, [0, 2]] - positions[:, [pelvis]][:, :, [0, 2]]
+    c, s = np.cos(yaw)[:, None], np.sin(yaw)[:, None]
+    return np.stack([c * rel[..., 0] - s * rel[..., 1], s * rel[..., 0] + c * rel[..., 1]], axis=-1)
+
+
+def entry_phase(before: Motion, before_pelvis: int, before_feet: list[int], at: float, cycle: Motion,
+                pelvis: int, feet: list[int]) -> float:
+    """Where (m of its travel) a distance-driven cycle is entered after a clip that plays
+    its time ``at`` last: at the cycle's frame whose feet stand most like the other clip's
+    (feet together after a stand: a side step opens with its lead foot, a walk from
+    mid-swing), so the blend between them does not cross or drag the feet."""
+    frame = int(np.clip(round(at / before.frame_time), 0, before.frames - 1))
+    last = _feet_around_pelvis(before.slice(frame, frame + 1), before_pelvis, before_feet)[0]
+    stances = _feet_around_pelvis(cycle, pelvis, feet)
+    best = int(np.argmin(np.linalg.norm(stances - last, axis=2).sum(axis=1)))
+    return float(travel_curve(cycle, pelvis)[best])
+
+
+STRIDE_RANGE = 1.4  # a cycle's strides are at most this much longer (or shorter) than the clip's
+
+
+def stride_scale(motion: Motion, pelvis: int, speed: float) -> float:
+    """How much longer than the clip's a travelling cycle's strides are at ``speed`` (m/s):
+    people walking faster lengthen their strides as well as quickening them, about as the
+    square root of the speed (so half the change is stride, half cadence), within
+    :data:`STRIDE_RANGE`. The feet, pinned where they land, take the longer strides."""
+    natural = travel_curve(motion, pelvis)[-1] / max(motion.duration, 1e-9)
+    if natural < 1e-6 or speed <= 0:
+        return 1.0
+    return float(np.clip(np.sqrt(speed / natural), 1 / STRIDE_RANGE, STRIDE_RANGE))
 
 
 FASTEST = 11.0  # m/s: a retimed clip's joints move no faster (real motion capture: ≤ 12.2 m/s)

@@ -201,7 +201,7 @@ def animate(track, tokens, segments, choices, times, skeleton, rest, scale, terr
     on it and sequenced with transitions (§5.4), feet pinned in their contacts and clamped
     to the ground."""
     from retarget.feet import clamp_to_ground, pin_feet
-    from retarget.sequence import Placed, contact_states, paced, sequence
+    from retarget.sequence import Placed, contact_states, entry_phase, paced, sequence, stride_scale
     from retarget.trajectory import world_path
 
     placed = [(*_span(seg, track, c), c) for seg, c in zip(segments, choices)]
@@ -231,7 +231,16 @@ def animate(track, tokens, segments, choices, times, skeleton, rest, scale, terr
     for k, pc in enumerate(pieces):
         if pc.progress is not None:
             inside = (times[1:] > pc.span.t0) & (times[1:] <= pc.span.t1)
-            pieces[k] = replace(pc, progress=np.concatenate([[0.0], np.cumsum(np.where(inside, step, 0.0))]))
+            progress = np.concatenate([[0.0], np.cumsum(np.where(inside, step, 0.0))])
+            stride = stride_scale(pc.motion, pc.pelvis, progress[-1] / max(pc.span.t1 - pc.span.t0, 1e-9))
+            phase = 0.0
+            if k > 0 and pieces[k - 1].progress is None:  # entered from a stand or an action
+                before, feet = pieces[k - 1], [choices[k].clip.roles[f] for f in ("left_foot", "right_foot")]
+                at = before.clip_out if before.clip_out is not None else before.motion.duration - before.motion.frame_time
+                phase = entry_phase(before.motion, before.pelvis,
+                                    [choices[k - 1].clip.roles[f] for f in ("left_foot", "right_foot")],
+                                    at if before.cycles == 0 else 0.0, pc.motion, pc.pelvis, feet)
+            pieces[k] = replace(pc, progress=progress / stride, phase=phase)  # longer strides, faster steps
     motion, transitions = sequence(pieces, times, frame_path[:, [0, 2]], frame_heading, skeleton, fps,
                                    ground_y=frame_path[:, 1])
     if pin:
