@@ -79,7 +79,8 @@ def compiled() -> None:
             with warnings.catch_warnings():  # the Bandai library's missing clips: said by compile, not here
                 warnings.simplefilter("ignore")
                 results = compile_doodle(doodle, **kw)
-            checks = check_scene({r.track: r.motion for r in results}, kw.get("terrain"))
+            checks = check_scene({r.track: r.motion for r in results}, kw.get("terrain"), contacts=results[0].contacts,
+                                 soles={r.track: r.sole for r in results})
             for track, c in checks.items():
                 print(_row(f"{name} ({track})", c))
 

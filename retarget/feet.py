@@ -95,14 +95,16 @@ LOWEST = 0.2  # m: the most the pelvis is lowered for a foot on lower ground (a 
 
 
 def pin_feet(motion: Motion, feet: list[int], fade: int = 3, terrain=None, contacts: np.ndarray | None = None,
-             standing: list[float] | None = None) -> Motion:
+             standing: list[float] | None = None, sole: float = 0.0) -> Motion:
     """The motion with each foot held still over each of its contact intervals.
 
     ``contacts`` (F, len(feet)): where the foot stands — the sequenced clips' own contacts
     (:func:`retarget.sequence.contact_states`); without them, found on the motion
     (:func:`planted`). A foot stands where it landed (its place at the interval's first
     frame) on the ground: ``standing`` (m, per foot) is its ankle's height above the
-    ground when standing flat (default: its lowest height in the interval), so a foot the
+    ground when standing flat (default: its lowest height in the interval) and ``sole``
+    how high its lowest joint or end site then is (a skeleton's foot joints sit inside the
+    foot, above the sole: Bandai's 2–4 cm), so a foot the
     clips or a style held up is put down. On uneven ``terrain`` every foot keeps, at every
     frame, the height above the ground under it that it had above the ground under the
     root (a swinging foot clears a rise, a standing one stands on its own ground), and
@@ -139,7 +141,8 @@ def pin_feet(motion: Motion, feet: list[int], fade: int = 3, terrain=None, conta
         hip = int(motion.skeleton.parents[knee]) if knee >= 0 else -1
         if hip < 0 or not helds[k].any():
             continue
-        target = world[0][:, ankle] - np.outer(_clearance(motion, world, ankle, terrain), [0.0, 1.0, 0.0])
+        gap = _clearance(motion, world, ankle, terrain) - sole
+        target = world[0][:, ankle] - np.outer(gap, [0.0, 1.0, 0.0])
         motion = two_bone_ik(motion, hip, knee, ankle, target, helds[k] ** 2, world=world)  # down as pins go
     return motion
 
@@ -300,15 +303,18 @@ def _lower_to_reach(motion: Motion, positions: np.ndarray, feet: list[int], targ
 
 
 def clamp_to_ground(motion: Motion, terrain=None) -> Motion:
-    """The motion raised, frame by frame, so no joint or End Site is below the ground
-    (``terrain``; flat y = 0 when None); the lift is eased in and out over a few frames."""
+    """The motion raised, frame by frame, so no joint or End Site of the body (a helper root
+    above the pelvis does not count) is below the ground (``terrain``; flat y = 0 when
+    None); the lift is eased in and out over a few frames."""
     from scipy.ndimage import gaussian_filter1d, maximum_filter1d
 
     from retarget.skeleton import end_site_positions
 
+    from retarget.analysis import pelvis_of
+
     world = forward_kinematics(motion)
-    points = [world[0]] + [end[:, None] for end in end_site_positions(motion, world).values()]
-    points = np.concatenate(points, axis=1)
+    body = world[0] if pelvis_of(motion.skeleton) == 0 else world[0][:, 1:]  # not a helper root on the floor
+    points = np.concatenate([body] + [end[:, None] for end in end_site_positions(motion, world).values()], axis=1)
     ground = 0.0 if terrain is None else terrain.height(points[:, :, [0, 2]])
     lift = np.maximum(0.0, np.max(ground - points[:, :, 1], axis=1))
     if not lift.any():

@@ -154,9 +154,13 @@ def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
 
 
 def check(motion: Motion, terrain=None, limits: Limits = Limits(), ground: float | None = None,
-          world=None) -> Check:
+          world=None, sole: float = 0.0) -> Check:
     """The check of one character. The ground is ``terrain`` (its height under each point),
-    else the height ``ground``, else — motion capture — the clip's lowest sole height."""
+    else the height ``ground``, else — motion capture — the clip's lowest sole height.
+    ``sole``: how high the skeleton's lowest foot joint or end site stands above the floor
+    when it stands (its joints sit inside the foot: 0 for the built-in humanoid, 2–4 cm for
+    Bandai's), so a foot is hovering only that much higher."""
+    standing_sole = sole if (terrain is not None or ground is not None) else 0.0  # mocap: its own floor
     positions, rotations = world if world is not None else forward_kinematics(motion)
     ends = end_site_positions(motion, (positions, rotations))
     roles = guess_roles(motion.skeleton)
@@ -179,7 +183,7 @@ def check(motion: Motion, terrain=None, limits: Limits = Limits(), ground: float
     lowest = np.full(motion.frames, np.inf)
     sole_heights = []
     for ankle, sole in zip(feet, soles):
-        sole_h = height(sole).min(axis=1)
+        sole_h = height(sole).min(axis=1) - standing_sole
         sole_heights.append(sole_h)
         # flat: every point of the foot — ankle, toes, tips — as low as when the character stands
         # on it (its 10th percentile over the motion), so whatever the skeleton puts where
@@ -343,17 +347,18 @@ def reaction_onset(motion: Motion, joint: int, first: int, last: int, limits: Li
 
 
 def check_scene(motions: dict, terrain=None, limits: Limits = Limits(), ground: float | None = 0.0,
-                contacts: tuple = ()) -> dict:
+                contacts: tuple = (), soles: dict | None = None) -> dict:
     """Every character's :class:`Check` with interpenetration against the others; the
     ground is ``terrain``, else the height ``ground`` (None: each motion's own floor, as
     for motion capture). ``contacts`` (:class:`Contact`): the scene's interactions, whose
     contact joints may touch and must meet, and whose reactions must not lead the contact
-    (both characters of an interaction get its findings)."""
+    (both characters of an interaction get its findings). ``soles``: per character, how high
+    its skeleton's feet stand on the floor (:func:`check`'s ``sole``)."""
     from dataclasses import replace
 
     worlds = {name: forward_kinematics(m) for name, m in motions.items()}
-    out = {name: check(m, terrain, limits, ground=ground if terrain is None else None, world=worlds[name])
-           for name, m in motions.items()}
+    out = {name: check(m, terrain, limits, ground=ground if terrain is None else None, world=worlds[name],
+                       sole=(soles or {}).get(name, 0.0)) for name, m in motions.items()}
     joints = {name: guess_roles(m.skeleton) for name, m in motions.items()}
     names = list(motions)
     for i, x in enumerate(names):

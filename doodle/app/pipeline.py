@@ -46,6 +46,7 @@ class Animation:
     efforts: list = None  # per segment, the recognised Effort (laban.classify.Quality) or None
     sample_times: np.ndarray = None  # s: the doodle's sample times the segments index (walks inserted: longer)
     contacts: tuple = ()  # the scene's interactions as compiled (retarget.qa.Contact), on every track
+    sole: float = 0.0  # m: how high the skeleton's lowest foot joint stands above the floor (retarget.qa)
 
 
 @dataclass(frozen=True)
@@ -243,10 +244,11 @@ def animate(track, tokens, segments, choices, times, skeleton, rest, scale, terr
             pieces[k] = replace(pc, progress=progress / stride, phase=phase)  # longer strides, faster steps
     motion, transitions = sequence(pieces, times, frame_path[:, [0, 2]], frame_heading, skeleton, fps,
                                    ground_y=frame_path[:, 1])
+    feet = [rest.roles["left_foot"], rest.roles["right_foot"]]
+    standing, sole = _standing(rest, feet)
     if pin:
-        feet = [rest.roles["left_foot"], rest.roles["right_foot"]]
         motion = pin_feet(motion, feet, terrain=terrain, contacts=contact_states(pieces, times),
-                          standing=_standing_heights(rest, feet))
+                          standing=standing, sole=sole)
     motion = clamp_to_ground(motion, terrain)
     ranges = [(int(np.searchsorted(times, sp.t0)), int(min(np.searchsorted(times, sp.t1), len(times) - 1)))
               for sp in spans]
@@ -256,23 +258,24 @@ def animate(track, tokens, segments, choices, times, skeleton, rest, scale, terr
     return Animation(track=track.name, motion=motion, segments=segments, tokens=tokens, path=frame_path,
                      transitions=transitions, clips=used, roles=rest.roles, terrain=terrain, frame_ranges=ranges,
                      projected=projected, styles=[c.style for c in choices], efforts=[c.effort for c in choices],
-                     sample_times=track.t)
+                     sample_times=track.t, sole=sole)
 
 
-def _standing_heights(rest, feet: list[int]) -> list[float]:
-    """Each ankle's height above the lowest point of its foot (toes, end sites) in the rest
-    pose: how high it is when the foot stands flat on the ground."""
+def _standing(rest, feet: list[int]) -> tuple[list[float], float]:
+    """How the library's skeleton stands on its floor (y = 0 in its clips), from the rest
+    pose: each ankle's height, and the height of its feet's lowest joint or end site (the
+    skeleton's sole sits this far above the floor: 0 for the built-in humanoid, 2–4 cm
+    for motion capture whose foot joints are inside the shoe)."""
     from retarget.skeleton import end_site_positions, forward_kinematics
 
     world = forward_kinematics(rest.motion.slice(0, 1))
     ends = end_site_positions(rest.motion.slice(0, 1), world)
     parents = rest.motion.skeleton.parents
-    out = []
+    lowest = []
     for ankle in feet:
         below = [j for j in range(len(parents)) if _descends(parents, j, ankle)]
-        points = [world[0][0, j, 1] for j in below] + [ends[j][0, 1] for j in below if j in ends]
-        out.append(float(world[0][0, ankle, 1] - min(points)))
-    return out
+        lowest += [world[0][0, j, 1] for j in below] + [ends[j][0, 1] for j in below if j in ends]
+    return [float(world[0][0, a, 1]) for a in feet], max(0.0, float(min(lowest)))
 
 
 def _descends(parents, j: int, ancestor: int) -> bool:

@@ -68,7 +68,8 @@ def compiled(file, fps: float, terrain: str | None, results: list, bvh_paths: di
                      "weight": r.styles[i][1], "effort": effort_entry(r.efforts[i])}
             entry["tokens"] = entry.pop("tokens")
             segments.append(entry)
-        report["tracks"][r.track] = {"bvh": str(bvh_paths[r.track]), "frames": r.motion.frames, "segments": segments,
+        report["tracks"][r.track] = {"bvh": str(bvh_paths[r.track]), "frames": r.motion.frames,
+                                     "sole_m": round(float(r.sole), 4), "segments": segments,
                                      "transitions": [round(b, 6) for b in r.transitions],
                                      "metrics": metrics[r.track]}
         if checks is not None:

@@ -77,7 +77,8 @@ def cmd_compile(args) -> int:
     paths = {r.track: out / f"{r.track}.bvh" for r in results}
     for r in results:
         write_bvh(paths[r.track], r.motion)
-    checks = check_scene({r.track: r.motion for r in results}, terrain, contacts=results[0].contacts)
+    checks = check_scene({r.track: r.motion for r in results}, terrain, contacts=results[0].contacts,
+                         soles={r.track: r.sole for r in results})
     report = compiled_report(args.file, args.fps, args.terrain, results, paths, {r.track: quality(r) for r in results},
                              checks)
     if args.preview:

@@ -31,7 +31,7 @@ def cmd_qa(args) -> int:
     if not folder.is_dir():
         raise DoodleError(f"{folder}: not a folder (give what `doodle compile -o` wrote)")
     report_path = folder / "report.json"
-    spec, ground, contacts = args.terrain, 0.0, ()
+    spec, ground, contacts, soles = args.terrain, 0.0, (), {}
     if report_path.exists():
         try:
             report = json.loads(report_path.read_text(encoding="utf-8"))
@@ -39,6 +39,7 @@ def cmd_qa(args) -> int:
             paths = [p if p.exists() else folder / p.name for p in paths]
             spec = spec or (report.get("terrain") if report.get("terrain") != "flat" else None)
             interactions = report.get("interactions", [])
+            soles = {Path(t["bvh"]).stem: float(t.get("sole_m", 0.0)) for t in report["tracks"].values()}
         except (OSError, ValueError, KeyError, TypeError, AttributeError) as e:
             raise DoodleError(f"{report_path}: not a report of `doodle compile` ({e})") from None
         from doodle.app.report import read_contacts
@@ -49,7 +50,7 @@ def cmd_qa(args) -> int:
     if not paths:
         raise DoodleError(f"{folder}: no BVH files to check")
     motions = {p.stem: read_bvh(p) for p in paths}
-    checks = check_scene(motions, parse_terrain(spec) if spec else None, ground=ground, contacts=contacts)
+    checks = check_scene(motions, parse_terrain(spec) if spec else None, ground=ground, contacts=contacts, soles=soles)
     for name, c in checks.items():
         print(f"{folder / (name + '.bvh')}: {c.frames} frames at {c.fps:g} fps")
         print(f"  {c.summary()}")
