@@ -19,9 +19,16 @@
   better than cutting the clip in five equal parts, so the default is the alternative the
   thesis proposes — optimal keyframe reduction by dynamic programming — which is a little
   better; manifests should still state stages where they are known.
-* Cycles: the period of a cyclic clip is the lag of greatest self-similarity of its
-  root-relative pose; its *cycle length* is the horizontal distance the root travels per
-  period.
+* Cycles: a cyclic clip's *cycle length* is one stride — a full gait cycle, both feet
+  stepping once — measured from the feet's contacts: the distance between two successive
+  footprints of the same foot (median over both feet); in a clip too short for two
+  footprints of one foot, twice a step (one foot's footprint to the other's, along the
+  direction of travel). Only a clip without footprints falls back to the period: the lag of
+  greatest self-similarity of its root-relative pose, which can lock on a step or on two
+  strides, and the distance the root travels in it.
+* Facing and travel: a clip faces where its hips' left-to-right axis turned a quarter turn
+  points (+z when the left hip is at +x); its *travel direction* is where the pelvis goes
+  relative to that facing (0 forwards, +π/2 leftwards, π backwards).
 * Foot contacts: a foot joint is in contact while it is near its lowest height in the clip
   and nearly still.
 """
@@ -36,7 +43,7 @@ import numpy as np
 from scipy.ndimage import gaussian_filter1d
 from scipy.signal import find_peaks
 
-from retarget.skeleton import Motion, Skeleton, forward_kinematics
+from retarget.skeleton import Motion, Skeleton, end_site_positions, forward_kinematics
 
 ROLE_PATTERNS = {
     "pelvis": [r"^(mixamorig:)?hips$", r"^pelvis$", r"^root$", r"^hip$"],
@@ -263,14 +270,131 @@ def cycle_period(motion: Motion, shortest: float = 0.4, longest: float = 2.0, wo
 
 
 def cycle_length(motion: Motion, period: int | None = None) -> float:
-    """Horizontal distance (m) the pelvis travels per cycle, averaged over the clip."""
+    """Horizontal distance (m) of one stride (:func:`stride_length`); without footprints, or
+    with ``period`` given, the distance the pelvis travels per period, averaged over the clip."""
     world = forward_kinematics(motion)[0]
-    period = cycle_period(motion, world=world) if period is None else period
+    if period is None:
+        stride = stride_length(motion, world)
+        if stride is not None:
+            return stride
+        period = cycle_period(motion, world=world)
     root = world[:, pelvis_of(motion.skeleton)][:, [0, 2]]
     if period >= motion.frames:
         return float(np.linalg.norm(root[-1] - root[0]))
     steps = np.linalg.norm(root[period:] - root[:-period], axis=1)
     return float(steps.mean())
+
+
+FOOTPRINT = 0.15  # m: two stances of one foot closer than this are the same footprint (a foot rolling)
+
+
+@dataclass(frozen=True)
+class Footprint:
+    """One stance of one foot: which foot (0 left, 1 right), its frames and where it stood."""
+
+    foot: int
+    start: int
+    end: int  # exclusive
+    at: np.ndarray  # (2,) horizontal (x, z) position, metres
+
+
+def footprints(motion: Motion, world: np.ndarray | None = None) -> list[Footprint]:
+    """The stances of both feet in time order (:func:`foot_contacts` runs; runs of one
+    foot less than :data:`FOOTPRINT` apart merged)."""
+    positions = forward_kinematics(motion)[0] if world is None else world
+    roles = guess_roles(motion.skeleton)
+    if "left_foot" not in roles or "right_foot" not in roles:
+        return []
+    feet = [roles["left_foot"], roles["right_foot"]]
+    contacts = foot_contacts(motion, feet, world=positions)
+    prints = []
+    for k, joint in enumerate(feet):
+        runs: list[Footprint] = []
+        on = np.concatenate([[False], contacts[:, k], [False]])
+        starts, ends = np.flatnonzero(on[1:] & ~on[:-1]), np.flatnonzero(~on[1:] & on[:-1])
+        for a, b in zip(starts, ends):
+            at = np.median(positions[a:b, joint][:, [0, 2]], axis=0)
+            if runs and np.linalg.norm(at - runs[-1].at) < FOOTPRINT:
+                last = runs.pop()
+                a, at = last.start, np.median(positions[last.start:b, joint][:, [0, 2]], axis=0)
+            runs.append(Footprint(k, int(a), int(b), at))
+        prints += runs
+    return sorted(prints, key=lambda p: p.start)
+
+
+def stride_length(motion: Motion, world: np.ndarray | None = None) -> float | None:
+    """One stride (m): the median distance between successive footprints of the same foot;
+    with none, twice the median step between footprints of alternate feet, along the
+    direction of travel; None without two footprints."""
+    prints = footprints(motion, world)
+    by_foot = [[p for p in prints if p.foot == k] for k in (0, 1)]
+    strides = [float(np.linalg.norm(b.at - a.at)) for one in by_foot for a, b in zip(one, one[1:])]
+    if strides:
+        return float(np.median(strides))
+    net = prints[-1].at - prints[0].at if len(prints) > 1 else np.zeros(2)
+    if len(prints) < 2 or not np.linalg.norm(net) > 1e-6:
+        return None
+    along = net / np.linalg.norm(net)
+    steps = [float((b.at - a.at) @ along) for a, b in zip(prints, prints[1:]) if a.foot != b.foot]
+    return 2.0 * float(np.median(steps)) if steps else None
+
+
+def hips_of(skeleton: Skeleton) -> tuple[int, int] | None:
+    """The left and right hip joints: the pelvis's children on the way to each foot."""
+    roles = guess_roles(skeleton)
+    if not {"pelvis", "left_foot", "right_foot"} <= set(roles):
+        return None
+    try:
+        left, right = (_chain(skeleton, roles["pelvis"], roles[f"{s}_foot"])[-2] for s in ("left", "right"))
+    except (ValueError, IndexError):
+        return None
+    return (left, right) if left != right else None
+
+
+def facing(motion: Motion, world: np.ndarray | None = None) -> np.ndarray:
+    """(F,) the body's heading per frame (radians about +y, 0 facing +z): the hips'
+    right-to-left axis turned a quarter turn (the character frame: +x left, +z front)."""
+    positions = forward_kinematics(motion)[0] if world is None else world
+    hips = hips_of(motion.skeleton)
+    if hips is None:
+        return np.zeros(motion.frames)
+    left = positions[:, hips[0]] - positions[:, hips[1]]
+    return np.arctan2(-left[:, 2], left[:, 0])  # front = left × up = (−left_z, 0, left_x)
+
+
+def facing_yaw(motion: Motion, world: np.ndarray | None = None) -> float:
+    """The clip's facing (radians about +y): the mean direction of :func:`facing`, or its
+    first frame's when the clip turns so much the mean says little (a spin)."""
+    yaw = facing(motion, world)
+    mean = np.array([np.sin(yaw).mean(), np.cos(yaw).mean()])
+    return float(np.arctan2(*mean)) if np.linalg.norm(mean) > 0.7 else float(yaw[0])
+
+
+def travel_yaw(motion: Motion, world: np.ndarray | None = None, least: float = 0.2) -> float | None:
+    """Where the pelvis travels, relative to where the clip faces (radians about +y, in
+    (−π, π]: 0 forwards, +π/2 leftwards, π backwards); None when it travels less than
+    ``least`` metres."""
+    positions = forward_kinematics(motion)[0] if world is None else world
+    hips = positions[:, pelvis_of(motion.skeleton)]
+    net = hips[-1] - hips[0]
+    if not np.hypot(net[0], net[2]) >= least:
+        return None
+    return float(np.angle(np.exp(1j * (np.arctan2(net[0], net[2]) - facing_yaw(motion, positions)))))
+
+
+def feet_low(motion: Motion, world=None, roles: dict | None = None) -> np.ndarray:
+    """(F,) the height of the lowest foot point: ankles, toes and their end sites
+    (``roles``: role → joint, default guessed from the joint names)."""
+    world = forward_kinematics(motion) if world is None else world
+    sk = motion.skeleton
+    roles = guess_roles(sk) if roles is None else roles
+    joints, stack = [], [roles["left_foot"], roles["right_foot"]]
+    while stack:
+        joints.append(stack.pop())
+        stack += sk.children(joints[-1])
+    ends = end_site_positions(motion, world)
+    heights = [world[0][:, j, 1] for j in joints] + [ends[j][:, 1] for j in joints if j in ends]
+    return np.min(heights, axis=0)
 
 
 def foot_contacts(motion: Motion, joints: list[int], height: float = 0.03, speed: float = 0.25,

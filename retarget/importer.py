@@ -6,8 +6,12 @@ file that matches the file name, else from the file name itself (Bandai's
 take number). A name that is a built-in action, or a known alias of one (``walk-left`` →
 Side Walk Left), takes that action's expression and flags, so the imported clips are
 recognised at once; other actions are clip-only until the mapping file or the learning
-wizard gives them an expression. Stages, cycle lengths and foot contacts are extracted from
-the clips when the library is loaded (:mod:`retarget.clips`) and reported here.
+wizard gives them an expression. An alias of a travelling action (Walk, Walk Back, Side Walk
+Left, Side Walk Right) is taken only by a clip that travels the way that action means,
+relative to where the clip faces (:func:`retarget.clips.fits`): Bandai's ``walk-left`` is
+a forward walk towards the performer's left, facing that way, not a side step, so it stays
+an action of its own (with a note saying so). Stages, cycle lengths and foot contacts are
+extracted from the clips when the library is loaded (:mod:`retarget.clips`) and reported here.
 
 Mapping file (TOML)::
 
@@ -26,9 +30,12 @@ import tomllib
 from dataclasses import replace
 from pathlib import Path
 
+import numpy as np
+
 from doodle.core.errors import DoodleError
 from doodle.core.files import atomic_write
 from library.manifest import FLAGS, ActionDef, Library, builtin, format_library, manifest_path
+from retarget.clips import FIT, travel_directions
 
 ALIASES = {
     "walk": "Walk", "walk-back": "Walk Back", "walkback": "Walk Back", "walk-left": "Side Walk Left",
@@ -66,6 +73,15 @@ def name_of(path: Path) -> str:
     return re.sub(r"[_-]?\d+$", "", stem) or stem
 
 
+def _travel(path: Path) -> float | None:
+    """Where a clip travels relative to its facing (radians), as :mod:`retarget.clips` reads it."""
+    from retarget.analysis import travel_yaw
+    from retarget.bvh import read_bvh
+    from retarget.clips import face_front
+
+    return travel_yaw(face_front(read_bvh(path)))
+
+
 def import_library(folder, name: str, output, mapping=None, include: str = "*.bvh") -> Library:
     """Write a library for the BVH files of ``folder`` into ``output``; returns it."""
     folder, output = Path(folder), Path(output)
@@ -76,11 +92,20 @@ def import_library(folder, name: str, output, mapping=None, include: str = "*.bv
         raise DoodleError(f"{folder}: no BVH files matching {include!r}")
     rules = read_map(mapping) if mapping else []
     known = {a.name: a for a in builtin().actions}
+    directions = travel_directions(builtin())
     actions: dict[str, ActionDef] = {}
+    notes: dict[str, str] = {}
     for path in files:
         rule = next((r for r in rules if fnmatch.fnmatch(path.name, r["match"])), None)
         raw = rule["action"] if rule else name_of(path)
         action_name = ALIASES.get(raw.lower(), raw)
+        if not rule and action_name in directions and action_name != raw:
+            travel = _travel(path)
+            if travel is None or abs(float(np.angle(np.exp(1j * (travel - directions[action_name]))))) > FIT:
+                way = "on the spot" if travel is None else f"{np.degrees(travel):+.0f}° from where it faces"
+                notes.setdefault(raw, f"{path.name} travels {way}, not the way {action_name} does "
+                                      f"({np.degrees(directions[action_name]):+.0f}°): kept as an action of its own")
+                action_name = raw
         if action_name in actions:
             actions[action_name] = replace(actions[action_name], clips=actions[action_name].clips + (str(path.resolve()),))
             continue
@@ -93,7 +118,7 @@ def import_library(folder, name: str, output, mapping=None, include: str = "*.bv
             expression = rule.get("expression", expression)
             flags.update({f: rule[f] for f in FLAGS if f in rule})
         actions[action_name] = ActionDef(action_name, expression, source=str(manifest_path(output)),
-                                         clips=(str(path.resolve()),), **flags)
+                                         clips=(str(path.resolve()),), note=notes.get(action_name, ""), **flags)
     library = Library(name, tuple(actions.values()), str(manifest_path(output)))
     output.mkdir(parents=True, exist_ok=True)
     atomic_write(manifest_path(output), [format_library(library, output.resolve())])

@@ -89,7 +89,8 @@ def test_a_failed_compile_leaves_existing_output(tmp_path, capsys):
 
 def test_compile_with_a_library_imported_from_bandai(tmp_path, capsys):
     """Bandai's skeleton (a joint_Root above the Hips, centimetres) drives the output; actions
-    Bandai has no clip for hold its rest pose; the walk still travels the doodle."""
+    Bandai has no fitting clip for play the built-in clip retargeted onto it (its walk-left
+    is a forward walk facing left, not a side step); the walk still travels the doodle."""
     bandai = ROOT.parent / "shared" / "data" / "mocap" / "bandai" / "dataset-1"
     if not bandai.exists():
         pytest.skip("Bandai data not found")
@@ -101,8 +102,8 @@ def test_compile_with_a_library_imported_from_bandai(tmp_path, capsys):
     report = json.loads((out / "report.json").read_text())
     segs = report["tracks"]["c0"]["segments"]
     assert [s["action"] for s in segs] == FIG_4_7
-    assert all(s["clip"] and "bandai" in s["clip"] for s in segs if "Walk" in s["action"])
-    assert all(s["clip"] is None for s in segs if s["action"] in ("Jump", "Stomp"))
+    assert all(s["clip"] and "bandai" in s["clip"] for s in segs if s["action"] == "Walk")
+    assert all(s["clip"] and "builtin" in s["clip"] for s in segs if s["action"] in ("Jump", "Stomp", "Side Walk Left"))
     motion = read_bvh(out / "c0.bvh")
     assert motion.skeleton.names[:2] == ("joint_Root", "Hips")
     hips = forward_kinematics(motion)[0][:, 1]
@@ -205,9 +206,9 @@ def test_bad_compile_options_are_one_line(tmp_path, capsys, flag, value):
     assert err.startswith("doodle: error:") and flag in err
 
 
-def test_a_library_without_a_clip_for_an_action_says_which_segments_hold_a_pose(tmp_path):
+def test_a_library_without_a_clip_for_an_action_says_which_segments_play_a_retargeted_one(tmp_path):
     """A user library that misses an action: compile warns, naming the action and the
-    segments that hold the rest pose instead of moving."""
+    segments that play the built-in clip retargeted onto the library's skeleton."""
     import warnings
 
     from doodle.app.pipeline import compile_doodle
@@ -223,6 +224,7 @@ def test_a_library_without_a_clip_for_an_action_says_which_segments_hold_a_pose(
         warnings.simplefilter("always")
         compile_doodle(demo, tmp_path / "walks")
     said = [str(w.message) for w in caught if "no clip of" in str(w.message)]
-    assert any(s.startswith("the library has no clip of Jump on its skeleton: 1 segment holds the rest pose (c0 4.")
-               for s in said), said
+    assert any(s.startswith("the library has no clip of Jump on its skeleton: 1 segment plays the built-in clip "
+                            "retargeted onto it (c0 4.") for s in said), said
+    assert not any("rest pose" in s for s in said), said
     assert not any("no clip of Walk " in s for s in said)

@@ -58,13 +58,47 @@ class Actions:
     user: object  # the user library or None
     compiled: Compiled
     clips: dict  # action -> [retarget.clips.Clip]
+    directions: dict = None  # travelling cyclic action -> the way its clips must travel (rad from the facing)
 
 
 def load_for_compile(library_dir=None, use_builtin: bool = True) -> Actions:
-    from retarget.clips import load_clips
+    """The library and its clips; with a user library, every built-in action it has no
+    fitting clip of on its skeleton gets the built-in clip retargeted onto that skeleton
+    (after its own clips, see :func:`choose`)."""
+    from library.manifest import builtin
+    from retarget.clips import load_clips, travel_directions
 
     library, user = load_combined(library_dir, use_builtin)
-    return Actions(library, user, compile_library(library), load_clips(library))
+    clips = load_clips(library)
+    own = load_clips(builtin()) if use_builtin and user is not None else {}
+    directions = travel_directions(builtin(), own) if use_builtin else travel_directions(library, clips)
+    if own:
+        clips = _with_retargeted(library, user, clips, own, directions)
+    return Actions(library, user, compile_library(library), clips, directions)
+
+
+def _with_retargeted(library, user, clips: dict, own: dict, directions: dict) -> dict:
+    """``clips`` with, for each action that has a built-in clip but no clip on the user
+    skeleton travelling the way the action means, the built-in clip retargeted onto it."""
+    from retarget.clips import fits, retargeted
+
+    mine = [c for a in user.actions for c in clips.get(a.name, [])]
+    if not mine:
+        return clips
+    reference = mine[0].motion
+    names = reference.skeleton.names
+    out = dict(clips)
+    for action in library.actions:
+        want = directions.get(action.name)
+        on = [c for c in clips.get(action.name, []) if c.motion.skeleton.names == names]
+        if own.get(action.name) and not any(fits(c, want) for c in on):
+            try:
+                extra = retargeted(own[action.name][0], reference.skeleton, reference, mine[0].roles)
+            except ValueError as e:  # a skeleton the role chains do not fit: the rest pose, as compile says
+                warnings.warn(f"{user.source}: built-in clips cannot be retargeted onto its skeleton: {e}")
+                return clips
+            out[action.name] = list(clips.get(action.name, [])) + [extra]
+    return out
 
 
 @dataclass(frozen=True)
@@ -77,6 +111,7 @@ class Choice:
     on_skeleton: bool  # a clip of its own (else the rest pose)
     style: tuple  # (L_t, L_w) applied
     effort: object  # laban.classify.Quality or None
+    retargeted: bool = False  # the clip is a built-in one retargeted onto the library's skeleton
 
 
 def compile_doodle(doodle: Doodle, library_dir=None, use_builtin: bool = True, params: SegmenterParams = SegmenterParams(),
@@ -107,7 +142,7 @@ def compile_doodle(doodle: Doodle, library_dir=None, use_builtin: bool = True, p
     skeleton, rest = _compile_skeleton(actions.library, actions.user, actions.clips)
     total, done = sum(len(segs) for _, segs in recognised.values()), 0
     origin = doodle.tracks[0].p[0]  # one origin for the scene: characters keep their relative places
-    results, missing, chosen = [], {}, {}
+    results, missing, retargeted, chosen = [], {}, {}, {}
     for track in doodle.tracks:
         tokens, segments = recognised[track.name]
         choices = []
@@ -121,13 +156,19 @@ def compile_doodle(doodle: Doodle, library_dir=None, use_builtin: bool = True, p
         results.append(animate(track, tokens, segments, choices, times, skeleton, rest, scale, terrain, origin,
                                fps, jump_arc, retime, style, pin))
         for seg, c in zip(segments, choices):
-            if not c.on_skeleton and seg.action != "unknown":
-                missing.setdefault(seg.action, []).append(
+            if (c.retargeted or not c.on_skeleton) and seg.action != "unknown":
+                (retargeted if c.retargeted else missing).setdefault(seg.action, []).append(
                     f"{track.name} {track.t[seg.start] - track.t[0]:.2f}–{track.t[min(seg.end, len(track.t) - 1)] - track.t[0]:.2f} s")
     for action, where in missing.items():
         warnings.warn(f"the library has no clip of {action} on its skeleton: {len(where)} segment"
                       f"{'s' * (len(where) != 1)} hold{'s' * (len(where) == 1)} the rest pose ({', '.join(where[:4])}"
                       f"{', …' if len(where) > 4 else ''})")
+    for action, where in retargeted.items():
+        own = any(not c.retargeted and c.motion.skeleton.names == skeleton.names for c in actions.clips.get(action, []))
+        warnings.warn(f"the library has no clip of {action}{' travelling the way it means' if own else ''} on its "
+                      f"skeleton: {len(where)} segment"
+                      f"{'s' * (len(where) != 1)} play{'s' * (len(where) == 1)} the built-in clip retargeted onto it "
+                      f"({', '.join(where[:4])}{', …' if len(where) > 4 else ''})")
     contacts = _contacts(results, recognised, {i.name: i for i in actions.library.interactions}, chosen)
     _apart(results, recognised, contacts)
     return [replace(r, contacts=contacts) for r in results]
@@ -157,11 +198,18 @@ def scene(doodle: Doodle, actions: Actions, params: SegmenterParams, threshold: 
 
 def choose(seg, track, actions: Actions, skeleton, rest, given, effort_model, style: str) -> Choice:
     """The clip a segment plays on the output skeleton (the rest pose where its action has
-    none), stylised by the quality ``given`` or, without one, the one the effort model
-    recognises in the hand's motion (a cycle is never retimed: its pace is the hand's travel)."""
+    none): the first that travels the way the action means (a side step sideways, relative
+    to its facing; :func:`retarget.clips.fits`) — the library's own before a retargeted
+    built-in one — stylised by the quality ``given`` or, without one, the one the effort
+    model recognises in the hand's motion (a cycle is never retimed: its pace is the
+    hand's travel)."""
+    from retarget.clips import fits
+
     library = actions.library
     on_skeleton = [c for c in actions.clips.get(seg.action, []) if c.motion.skeleton.names == skeleton.names]
-    clip = on_skeleton[0] if on_skeleton else rest
+    want = (actions.directions or {}).get(seg.action)
+    fitting = [c for c in on_skeleton if fits(c, want)] or on_skeleton
+    clip = fitting[0] if fitting else rest
     name = seg.action if seg.action in library.names else "Idle"
     action = library.action(name) if name in library.names else library.action(rest.action)
     effort = None
@@ -174,7 +222,8 @@ def choose(seg, track, actions: Actions, skeleton, rest, given, effort_model, st
     styled = bool((lt or lw) and on_skeleton)
     if styled:
         clip = _stylized(clip, lt, lw, style, action.cyclic)
-    return Choice(clip, action, bool(on_skeleton), (lt, lw) if styled else (0.0, 0.0), effort)
+    return Choice(clip, action, bool(on_skeleton), (lt, lw) if styled else (0.0, 0.0), effort,
+                  bool(on_skeleton) and clip.retargeted)
 
 
 def _span(seg, track, choice: Choice):
@@ -675,18 +724,20 @@ def _transition_points(pieces: list, clips: list) -> list:
 
 
 def _compile_skeleton(library, user, clips):
-    """The skeleton of the output (the user library's clips' when it has any, else the
-    built-in humanoid) and a rest-pose clip on it, played for actions that have no clip
-    on that skeleton (held first frame of its Idle, or of its first clip)."""
+    """The skeleton of the output (the user library's own clips' when it has any, else the
+    built-in humanoid) and a rest clip on it, played for actions that have no clip on that
+    skeleton: its Idle (the library's own, else the retargeted built-in one), else the
+    held first frame of its first clip."""
     from retarget.analysis import Stages
 
-    mine = [c for a in (user.actions if user else ()) for c in clips.get(a.name, [])]
+    mine = [c for a in (user.actions if user else ()) for c in clips.get(a.name, []) if not c.retargeted]
     pool = mine or [c for found in clips.values() for c in found]
     if not pool:
         raise DoodleError(f"{library.source}: no action has a clip to animate")
     skeleton = pool[0].motion.skeleton
     same = [c for c in pool if c.motion.skeleton.names == skeleton.names]
-    base = next((c for c in same if c.action == "Idle"), same[0])
+    idles = [c for c in clips.get("Idle", []) if c.motion.skeleton.names == skeleton.names]
+    base = min(idles, key=lambda c: c.retargeted) if idles else same[0]
     if base.action == "Idle":
         return skeleton, base
     still = base.motion.slice(0, 1)
