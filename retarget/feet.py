@@ -266,7 +266,7 @@ def _pins(ankle: np.ndarray, contact: np.ndarray, fade: int, terrain, standing: 
     standing = held.copy()
     for lo, hi, a, b, length in steps:  # a step in an arc from one spot to the next
         u = (np.arange(lo, hi) - lo + 1) / (hi - lo + 1)
-        pin[lo:hi] = a + np.outer(min_jerk(u), b - a)
+        pin[lo:hi] = a + np.outer(min_jerk(np.clip((u - 0.15) / 0.7, 0.0, 1.0)), b - a)  # up, across, down
         pin[lo:hi, 1] += np.clip(length / 2, *STEP_APEX) * np.sin(np.pi * u)
         held[lo:hi] = 1.0
         standing[lo:hi] = 0.0

@@ -5,8 +5,9 @@ Each measure names the frames it happens in, so a failure can be looked at:
 * **sliding** — a foot flat on the floor (every point of it within :attr:`Limits.flat` of
   its height when the character stands: a swinging foot passes 2–3 cm higher) of which no point — ankle,
   toes, toe tips — moves horizontally slower than :attr:`Limits.slide` (a foot rolling over
-  its heel or toes is not sliding), flat for at least :attr:`Limits.stance` (a swinging foot
-  skimming the floor is not standing on it); reported as frames per second of motion;
+  its heel or toes is not sliding) between two frames it is flat in, flat for at least
+  :attr:`Limits.stance` (a swinging foot skimming the floor is not standing on it); reported
+  as frames per second of motion;
 * **pops** — any joint or end site moving faster than :attr:`Limits.pop` between two frames;
 * **one-frame turns** — the pelvis's heading changing by more than :attr:`Limits.turn` in one
   frame while the frames either side turn less than a third of that (a turn that is not
@@ -194,8 +195,10 @@ def check(motion: Motion, terrain=None, limits: Limits = Limits(), ground: float
                 flat[a:b] = False
         # a foot slides when no point of it stays put (a foot rolling over its toes or heel does not)
         points = np.concatenate([positions[:, [ankle]], sole], axis=1)[:, :, [0, 2]]
-        speed = np.linalg.norm(np.gradient(points, dt, axis=0), axis=2).min(axis=1)
-        sliding |= flat & (speed > limits.slide)
+        # ... between two frames it is flat in (a foot still on the floor in the frame before it
+        # lifts, or the frame it lands, has not slid yet)
+        moved = np.linalg.norm(np.diff(points, axis=0), axis=2).min(axis=1) / dt
+        sliding[1:] |= flat[1:] & flat[:-1] & (moved > limits.slide)
         # standing in the air: the foot still, every point of it, for longer than a foot is held up
         # in the air by people (:attr:`Limits.held`) — but its sole above the ground
         still = np.linalg.norm(np.gradient(points, dt, axis=0), axis=2).max(axis=1) <= limits.still
@@ -225,8 +228,15 @@ def _one_frame_turns(root_q: np.ndarray, limit_deg: float) -> list[int]:
     under a third of it."""
     from doodle.core import quat
 
+    # the heading from the front and the left axes, each weighted by how level it lies: a
+    # flip pitches the front through the vertical (its heading would swap in a frame) but
+    # keeps the left level; a cartwheel the other way round
     front = quat.rotate(root_q, np.tile([0.0, 0.0, 1.0], (len(root_q), 1)))
-    yaw = np.unwrap(np.arctan2(front[:, 0], front[:, 2]))
+    left = quat.rotate(root_q, np.tile([1.0, 0.0, 0.0], (len(root_q), 1)))
+    level_f, level_l = front[:, 0] ** 2 + front[:, 2] ** 2, left[:, 0] ** 2 + left[:, 2] ** 2
+    c = level_f * front[:, 2] + level_l * left[:, 0]  # the left axis turned back by a right angle
+    s = level_f * front[:, 0] - level_l * left[:, 2]
+    yaw = np.unwrap(np.arctan2(s, c))
     step = np.degrees(np.abs(np.diff(yaw)))
     out = []
     for k in range(len(step)):

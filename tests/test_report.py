@@ -34,7 +34,7 @@ def test_compile_report_shape(tmp_path, capsys):
     assert set(report) == {"file", "fps", "duration_s", "terrain", "tracks", "interactions"}
     assert report["interactions"] == []  # one character: no interaction, no contact
     track = report["tracks"]["c0"]
-    assert set(track) == {"bvh", "frames", "segments", "transitions", "metrics", "check"}
+    assert set(track) == {"bvh", "frames", "sole_m", "segments", "transitions", "metrics", "check"}
     assert isinstance(track["check"]["passes"], bool) and isinstance(track["check"]["sliding_frames"], list)
     assert isinstance(track["check"]["contacts_missed"], list) and isinstance(track["check"]["reaction_lead_frames"], list)
     assert Path(track["bvh"]).exists() and track["frames"] > 0

@@ -202,7 +202,7 @@ def choose(seg, track, actions: Actions, skeleton, rest, given, effort_model, st
     to its facing; :func:`retarget.clips.fits`) — the library's own before a retargeted
     built-in one — stylised by the quality ``given`` or, without one, the one the effort
     model recognises in the hand's motion (a cycle is never retimed: its pace is the
-    hand's travel)."""
+    hand's travel; nor a jump: its flight lasts what gravity gives it)."""
     from retarget.clips import fits
 
     library = actions.library
@@ -217,7 +217,7 @@ def choose(seg, track, actions: Actions, skeleton, rest, given, effort_model, st
         effort = effort_quality(effort_model, track, seg.start, seg.end)
         given = (effort.time, effort.weight)
     lt, lw = given or (0.0, 0.0)
-    if action.cyclic:
+    if action.cyclic or action.jumping:  # a cycle's pace is the hand's travel; a flight lasts what gravity gives it
         lt = 0.0
     styled = bool((lt or lw) and on_skeleton)
     if styled:
@@ -268,6 +268,7 @@ def animate(track, tokens, segments, choices, times, skeleton, rest, scale, terr
         pieces.append(Placed(span, clip.motion, clip.roles["pelvis"], cycles, times, driven, travels,
                              gesture=gesture, contacts=clip.contacts))
     pieces = _transition_points(pieces, [c.clip for c in choices])
+    pieces = _make_room(pieces, track.t)
     pieces = [replace(pc, pace=paced(pc.motion, pc.clip_in, pc.clip_out, pc.span.t1 - pc.span.t0))
               if pc.cycles == 0 and pc.progress is None and pc.gesture is None else pc for pc in pieces]
     pieces = [replace(pc, span=_in_flight(pc)) if pc.span.jumping else pc for pc in pieces]
@@ -335,6 +336,48 @@ def _descends(parents, j: int, ancestor: int) -> bool:
     return False
 
 
+ROOM = 0.6  # at most this share of a neighbouring stand is lent to an action that needs the time
+
+
+def _make_room(pieces: list, t: np.ndarray) -> list:
+    """One-shot actions given the time they need: a clip that cannot be played in its
+    segment without a joint going faster than a person's (:func:`retarget.sequence.shortest`:
+    a hop performed in half a second, a jump's whole wind-up and landing) starts earlier and
+    ends later, in the stands (in-place, non-jumping neighbours) either side — up to
+    :data:`ROOM` of each — rather than whipping through."""
+    from retarget.sequence import shortest
+
+    pieces = list(pieces)
+    for k, pc in enumerate(pieces):
+        if pc.cycles != 0 or pc.progress is not None or pc.gesture is not None:
+            continue
+        short = 1.1 * shortest(pc.motion, pc.clip_in, pc.clip_out) - (pc.span.t1 - pc.span.t0)
+        if short <= 0:
+            continue
+        lend = []
+        for j in (k - 1, k + 1):
+            n = pieces[j] if 0 <= j < len(pieces) else None
+            ok = n is not None and n.span.in_place and not n.span.jumping and n.cycles > 0
+            lend.append(ROOM * (n.span.t1 - n.span.t0) if ok else 0.0)
+        before = min(lend[0], max(short / 2, short - lend[1]))
+        after = min(lend[1], short - before)
+        span = pc.span
+        if before > 0:
+            prev = pieces[k - 1].span
+            cut = span.t0 - before
+            i = int(np.clip(np.searchsorted(t, cut), prev.i0 + 1, span.i0))
+            pieces[k - 1] = replace(pieces[k - 1], span=replace(prev, t1=cut, i1=i))
+            span = replace(span, t0=cut, i0=i)
+        if after > 0:
+            nxt = pieces[k + 1].span
+            cut = span.t1 + after
+            i = int(np.clip(np.searchsorted(t, cut), span.i1, nxt.i1 - 1))
+            pieces[k + 1] = replace(pieces[k + 1], span=replace(nxt, t0=cut, i0=i))
+            span = replace(span, t1=cut, i1=i)
+        pieces[k] = replace(pc, span=span)
+    return pieces
+
+
 def _in_flight(piece):
     """A jump's span with its travel (``execution``) over the clip's flight — from the
     frame both feet leave the ground to the frame one lands — as fractions of the range of
@@ -354,6 +397,10 @@ def _in_flight(piece):
     landing = np.clip((air[-1] + 0.5) * m.frame_time, start, end)
     if landing - take_off < 1e-6:
         return piece.span
+    if piece.pace is not None:  # retimed unevenly: the span's fractions at those clip times
+        u, clip_times = piece.pace
+        return replace(piece.span, execution=(float(np.interp(take_off, clip_times, u)),
+                                              float(np.interp(landing, clip_times, u))))
     return replace(piece.span, execution=((take_off - start) / length, (landing - start) / length))
 
 
@@ -651,7 +698,6 @@ def _stylized(clip, lt: float, lw: float, style: str = "modifiers", cycle: bool 
     """The clip with Time then Weight applied, its stages moved with it (``style``
     "preferred": motion scale and reshaping only, the timing left to the gesture; a
     ``cycle`` gets Weight's swing and posture only)."""
-    from retarget.analysis import foot_contacts
     from retarget.stylize import cyclic, preferred, stylize_staged
 
     stages = clip.stages
@@ -661,7 +707,14 @@ def _stylized(clip, lt: float, lw: float, style: str = "modifiers", cycle: bool 
         motion = preferred(clip.motion, clip.stages, lt, lw)
     else:
         motion, stages = stylize_staged(clip.motion, clip.stages, lt, lw)
-    contacts = foot_contacts(motion, [clip.roles["left_foot"], clip.roles["right_foot"]])  # as the style plays them
+    if motion.frames == clip.motion.frames:  # poses edited in place: the feet stand when they stood
+        contacts = clip.contacts
+    else:  # retimed: the neutral clip's contacts carried along with its stages
+        old = [0, clip.stages.preparation, clip.stages.anticipation, clip.stages.execution,
+               clip.stages.follow_through, clip.motion.frames - 1]
+        new = [0, stages.preparation, stages.anticipation, stages.execution, stages.follow_through, motion.frames - 1]
+        at = np.interp(np.arange(motion.frames), np.maximum.accumulate(new), old)
+        contacts = clip.contacts[np.clip(np.rint(at).astype(int), 0, len(clip.contacts) - 1)]
     return replace(clip, motion=motion, stages=stages, contacts=contacts)
 
 
