@@ -399,10 +399,27 @@ def feet_low(motion: Motion, world=None, roles: dict | None = None) -> np.ndarra
 
 def foot_contacts(motion: Motion, joints: list[int], height: float = 0.03, speed: float = 0.25,
                   world: np.ndarray | None = None) -> np.ndarray:
-    """(F, len(joints)) bool: each joint within ``height`` m of its lowest point in the clip
-    and slower than ``speed`` m/s."""
+    """(F, len(joints)) bool: each foot on the floor — the lowest of the joint and the joints
+    below it (toes) within ``height`` m of the floor — and the joint slower than ``speed``
+    m/s. The floor is where the clip's lower foot mostly stands (the 5th percentile of its
+    height), not its very lowest point: a landing that bends an ankle through it once does
+    not lift every stance off the floor."""
     positions = forward_kinematics(motion)[0] if world is None else world
-    feet = positions[:, joints]
-    low = feet[:, :, 1] - feet[:, :, 1].min(axis=0)
-    vel = np.linalg.norm(np.gradient(feet, motion.frame_time, axis=0), axis=2)
-    return (low <= height) & (vel <= speed)
+    parents = motion.skeleton.parents
+
+    def below(j):
+        return [k for k in range(len(parents)) if k == j or _under(parents, k, j)]
+
+    soles = np.stack([positions[:, below(j), 1].min(axis=1) for j in joints], axis=1)
+    floor = float(np.percentile(soles.min(axis=1), 5))
+    vel = np.linalg.norm(np.gradient(positions[:, joints], motion.frame_time, axis=0), axis=2)
+    return (soles - floor <= height) & (vel <= speed)
+
+
+def _under(parents, j: int, ancestor: int) -> bool:
+    j = int(parents[j])
+    while j >= 0:
+        if j == ancestor:
+            return True
+        j = int(parents[j])
+    return False

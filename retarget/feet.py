@@ -95,7 +95,7 @@ LOWEST = 0.2  # m: the most the pelvis is lowered for a foot on lower ground (a 
 
 
 def pin_feet(motion: Motion, feet: list[int], fade: int = 3, terrain=None, contacts: np.ndarray | None = None,
-             standing: list[float] | None = None, sole: float = 0.0) -> Motion:
+             standing: list[float] | None = None, sole: float = 0.0, ground_y: np.ndarray | None = None) -> Motion:
     """The motion with each foot held still over each of its contact intervals.
 
     ``contacts`` (F, len(feet)): where the foot stands — the sequenced clips' own contacts
@@ -109,14 +109,20 @@ def pin_feet(motion: Motion, feet: list[int], fade: int = 3, terrain=None, conta
     frame, the height above the ground under it that it had above the ground under the
     root (a swinging foot clears a rise, a standing one stands on its own ground), and
     where a leg cannot reach its spot the pelvis is lowered: its height comes from the
-    ground under the feet, not under the root. Pins fade in and out over ``fade`` frames."""
+    ground under the feet, not under the root (``ground_y``, per frame: the ground the root
+    was put on). Pins fade in and out over ``fade`` frames."""
     original = forward_kinematics(motion)[0]
     if contacts is None:
         contacts = planted(motion, feet, original, terrain)
     rise = None
-    if terrain is not None:  # the ground under each foot relative to the ground under the root
-        under_root = terrain.height(original[:, 0][:, [0, 2]])
-        rise = [terrain.height(original[:, a][:, [0, 2]]) - under_root for a in feet]
+    if terrain is not None:  # the ground under each foot relative to the ground under the root,
+        # but not in the air (both feet off: the feet go with the body)
+        under_root = terrain.height(original[:, 0][:, [0, 2]]) if ground_y is None else ground_y
+        aloft = ~contacts.any(axis=1)
+        rise = [np.where(aloft, 0.0, terrain.height(original[:, a][:, [0, 2]]) - under_root) for a in feet]
+        from scipy.ndimage import gaussian_filter1d
+
+        rise = [gaussian_filter1d(r, 1.0, mode="nearest") for r in rise]  # eased into and out of a flight
     targets, weights, helds = [], [], []
     for k, ankle in enumerate(feet):
         target, weight, held = _pins(original[:, ankle], contacts[:, k], fade, terrain,
@@ -134,7 +140,7 @@ def pin_feet(motion: Motion, feet: list[int], fade: int = 3, terrain=None, conta
             continue
         motion = two_bone_ik(motion, hip, knee, ankle, targets[k], weights[k], world=world)
     if terrain is not None:  # the foot laid along the slope under it
-        motion = _soles_on_ground(motion, original, feet, terrain)
+        motion = _soles_on_ground(motion, original, feet, terrain, ground_y)
     world = forward_kinematics(motion)
     for k, ankle in enumerate(feet):  # a standing foot's lowest point (heel, toes) on the ground
         knee = int(motion.skeleton.parents[ankle])
@@ -167,12 +173,12 @@ def _descends(parents, j: int, ancestor: int) -> bool:
     return False
 
 
-def _soles_on_ground(motion: Motion, original: np.ndarray, feet: list[int], terrain) -> Motion:
+def _soles_on_ground(motion: Motion, original: np.ndarray, feet: list[int], terrain, ground_y=None) -> Motion:
     """Each foot pitched about its ankle so its toes keep the height above the ground under
     them that they had above the ground under the root (a foot on a slope lies along it)."""
     world = forward_kinematics(motion)
     positions, rotations = world
-    under_root = terrain.height(original[:, 0][:, [0, 2]])
+    under_root = terrain.height(original[:, 0][:, [0, 2]]) if ground_y is None else ground_y
     rots = motion.rotations.copy()
     parents = motion.skeleton.parents
     for ankle in feet:

@@ -143,9 +143,9 @@ def stride_scale(motion: Motion, pelvis: int, speed: float) -> float:
 FASTEST = 11.0  # m/s: a retimed clip's joints move no faster (real motion capture: ≤ 12.2 m/s)
 
 
-def _limits(motion: Motion, clip_in: float, clip_out: float | None, limit: float):
+def _limits(motion: Motion, clip_in: float, clip_out: float | None, limit: float, natural: tuple | None = None):
     """The played range's clip-time knots, their steps and the shortest each step may last
-    so that no joint or end site goes faster than ``limit``."""
+    so that no joint or end site goes faster than ``limit`` (or than in the clip itself)."""
     end = (motion.frames - 1) * motion.frame_time if clip_out is None else clip_out
     f0 = int(np.floor(clip_in / motion.frame_time + 1e-9))
     f1 = int(np.ceil(end / motion.frame_time - 1e-9))
@@ -157,24 +157,31 @@ def _limits(motion: Motion, clip_in: float, clip_out: float | None, limit: float
     positions = np.concatenate([world[0]] + [e[:, None] for e in ends.values()], axis=1)[f0:f1 + 1]
     step = np.diff(knots)
     speed = np.linalg.norm(np.diff(positions, axis=0), axis=2).max(axis=1) / motion.frame_time
-    return knots, step, step * speed / limit
+    least = step * np.minimum(speed / limit, 1.0)  # never slower than the clip's own pace
+    if natural is not None:  # a flight lasts as long as it does
+        inside = (knots[1:] > natural[0] + 1e-9) & (knots[:-1] < natural[1] - 1e-9)
+        least[inside] = step[inside]
+    return knots, step, least
 
 
-def shortest(motion: Motion, clip_in: float = 0.0, clip_out: float | None = None, limit: float = FASTEST) -> float:
+def shortest(motion: Motion, clip_in: float = 0.0, clip_out: float | None = None, limit: float = FASTEST,
+             natural: tuple | None = None) -> float:
     """The least time (s) a one-shot clip's range can be played in without any joint going
-    faster than ``limit`` (its slow parts squeezed to nothing)."""
-    return float(_limits(motion, clip_in, clip_out, limit)[2].sum())
+    faster than ``limit`` (its slow parts squeezed to nothing) and with the clip times
+    ``natural`` (a jump's flight) played at their own pace."""
+    return float(_limits(motion, clip_in, clip_out, limit, natural)[2].sum())
 
 
 def paced(motion: Motion, clip_in: float, clip_out: float | None, duration: float,
-          limit: float = FASTEST) -> tuple[np.ndarray, np.ndarray]:
+          limit: float = FASTEST, natural: tuple | None = None) -> tuple[np.ndarray, np.ndarray]:
     """A one-shot clip's range retimed to last ``duration`` seconds (§5.3: ``T_P/T_A``)
     without any joint going faster than ``limit``: where a uniform squeeze would, the slow
     parts of the clip (holds, wind-ups) are squeezed more and the fast ones less. Returns
     knots (fraction of the span, clip time) for :func:`clip_time`; uniform when it can be
-    (or when even that cannot keep to the limit: give the clip room, :func:`shortest`)."""
+    (or when even that cannot keep to the limit: give the clip room, :func:`shortest`).
+    ``natural``: clip times (a jump's flight) played at their own pace where they can be."""
     end = (motion.frames - 1) * motion.frame_time if clip_out is None else clip_out
-    knots, step, least = _limits(motion, clip_in, clip_out, limit)
+    knots, step, least = _limits(motion, clip_in, clip_out, limit, natural)
     if len(knots) < 3 or duration <= 0:
         return np.array([0.0, 1.0]), np.array([clip_in, end])
     speed_max = float((least / np.maximum(step, 1e-12)).max()) * limit

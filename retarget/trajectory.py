@@ -83,15 +83,19 @@ def world_path(t: np.ndarray, p: np.ndarray, spans: list[Span], scale: float,
     for s in spans:
         seg = slice(s.i0, s.i1)
         path[seg] = ground[seg] + offset
-        if s.in_place:
-            moved = path[s.i1 - 1] - path[s.i0]
+        if s.in_place:  # the next segment starts where this one stands (no step between samples)
             path[seg] = path[s.i0]
-            offset -= moved
+            offset = path[s.i0] - ground[min(s.i1, len(ground) - 1)]
         elif s.jumping:
             path[seg] = _retimed_jump(t[seg], path[seg], s)
     heading = _heading(t, path, spans, facing or 0.0)
     if terrain is not None:
         path[:, 1] = terrain.height(path[:, [0, 2]])
+        for s in spans:  # in the air the body does not follow the ground's bumps: from take-off to landing height
+            if s.jumping and s.i1 - s.i0 > 1:
+                u = (t[s.i0:s.i1] - t[s.i0]) / max(t[s.i1 - 1] - t[s.i0], 1e-9)
+                w = np.clip((u - s.execution[0]) / max(s.execution[1] - s.execution[0], 1e-6), 0.0, 1.0)
+                path[s.i0:s.i1, 1] = path[s.i0, 1] + w * (path[s.i1 - 1, 1] - path[s.i0, 1])
     if jump_arc not in ("clip", "hermite", "apex"):
         raise ValueError(f"jump_arc must be clip, hermite or apex, not {jump_arc!r}")
     if jump_arc != "clip":
@@ -116,19 +120,15 @@ def _arc_lift(t: np.ndarray, points: np.ndarray, doodle: np.ndarray, span: Span,
 
 
 def _retimed_jump(t: np.ndarray, points: np.ndarray, span: Span) -> np.ndarray:
-    """Travel only during execution (the flight): the segment's own ground path, covered
-    at an even speed — a body in the air keeps its horizontal speed — whatever the hand's
-    own pace along it."""
+    """Travel only during execution (the flight), from where the segment takes off to
+    where it lands: in a straight line at an even speed, as a body in the air moves,
+    whatever the hand's own pace and wobble on the way."""
     if len(t) < 2:
         return points
     u = (t - t[0]) / max(t[-1] - t[0], 1e-9)
     a, b = span.execution
     w = np.clip((u - a) / max(b - a, 1e-6), 0.0, 1.0)
-    along = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(points[:, [0, 2]], axis=0), axis=1))])
-    if along[-1] < 1e-9:
-        return np.repeat(points[:1], len(points), axis=0)
-    keep = np.concatenate([[True], np.diff(along) > 1e-12])
-    return np.column_stack([np.interp(w * along[-1], along[keep], points[keep, k]) for k in range(points.shape[1])])
+    return points[0] + np.outer(w, points[-1] - points[0])
 
 
 TURNING_SPEED = 0.3  # m/s: slower drift of the path (a hand at rest) does not turn the character

@@ -202,7 +202,8 @@ def choose(seg, track, actions: Actions, skeleton, rest, given, effort_model, st
     to its facing; :func:`retarget.clips.fits`) — the library's own before a retargeted
     built-in one — stylised by the quality ``given`` or, without one, the one the effort
     model recognises in the hand's motion (a cycle is never retimed: its pace is the
-    hand's travel; nor a jump: its flight lasts what gravity gives it)."""
+    hand's travel; a jump's timing is left as it is — its flight lasts what gravity gives it
+    — and it takes the quality in its poses)."""
     from retarget.clips import fits
 
     library = actions.library
@@ -217,11 +218,11 @@ def choose(seg, track, actions: Actions, skeleton, rest, given, effort_model, st
         effort = effort_quality(effort_model, track, seg.start, seg.end)
         given = (effort.time, effort.weight)
     lt, lw = given or (0.0, 0.0)
-    if action.cyclic or action.jumping:  # a cycle's pace is the hand's travel; a flight lasts what gravity gives it
+    if action.cyclic:
         lt = 0.0
     styled = bool((lt or lw) and on_skeleton)
     if styled:
-        clip = _stylized(clip, lt, lw, style, action.cyclic)
+        clip = _stylized(clip, lt, lw, "preferred" if action.jumping else style, action.cyclic)
     return Choice(clip, action, bool(on_skeleton), (lt, lw) if styled else (0.0, 0.0), effort,
                   bool(on_skeleton) and clip.retargeted)
 
@@ -268,9 +269,12 @@ def animate(track, tokens, segments, choices, times, skeleton, rest, scale, terr
         pieces.append(Placed(span, clip.motion, clip.roles["pelvis"], cycles, times, driven, travels,
                              gesture=gesture, contacts=clip.contacts))
     pieces = _transition_points(pieces, [c.clip for c in choices])
-    pieces = _make_room(pieces, track.t)
-    pieces = [replace(pc, pace=paced(pc.motion, pc.clip_in, pc.clip_out, pc.span.t1 - pc.span.t0))
-              if pc.cycles == 0 and pc.progress is None and pc.gesture is None else pc for pc in pieces]
+    limits = [_speed_limit(pc, track, scale) for pc in pieces]
+    pieces = _make_room(pieces, track.t, limits, [c.clip.stages for c in choices])
+    pieces = [replace(pc, pace=paced(pc.motion, pc.clip_in, pc.clip_out, pc.span.t1 - pc.span.t0, limit,
+                                     _flight_times(pc)))
+              if pc.cycles == 0 and pc.progress is None and pc.gesture is None else pc
+              for pc, limit in zip(pieces, limits)]
     pieces = [replace(pc, span=_in_flight(pc)) if pc.span.jumping else pc for pc in pieces]
     spans = [pc.span for pc in pieces]
     front = quat.rotate(track.q[:1], np.array([[0.0, 0.0, 1.0]]))[0]  # the figurine's front at the start
@@ -298,7 +302,7 @@ def animate(track, tokens, segments, choices, times, skeleton, rest, scale, terr
     standing, sole = _standing(rest, feet)
     if pin:
         motion = pin_feet(motion, feet, terrain=terrain, contacts=contact_states(pieces, times),
-                          standing=standing, sole=sole)
+                          standing=standing, sole=sole, ground_y=frame_path[:, 1])
     motion = clamp_to_ground(motion, terrain)
     ranges = [(int(np.searchsorted(times, sp.t0)), int(min(np.searchsorted(times, sp.t1), len(times) - 1)))
               for sp in spans]
@@ -339,19 +343,49 @@ def _descends(parents, j: int, ancestor: int) -> bool:
 ROOM = 0.6  # at most this share of a neighbouring stand is lent to an action that needs the time
 
 
-def _make_room(pieces: list, t: np.ndarray) -> list:
+def _speed_limit(piece, track, scale: float) -> float:
+    """How fast (m/s) a one-shot clip's joints may move in its own frame once retimed: a
+    person's fastest (:data:`retarget.sequence.FASTEST`) less, for a jump, the speed its
+    root travels at over the flight (the doodle's distance over the clip's flight time)."""
+    from retarget.sequence import FASTEST
+
+    flight = _flight_times(piece)
+    if flight is None:
+        return FASTEST
+    ground = (track.p[min(piece.span.i1, len(track.p)) - 1] - track.p[piece.span.i0])[[0, 2]] * scale
+    return float(max(FASTEST - np.linalg.norm(ground) / max(flight[1] - flight[0], 1e-9), FASTEST / 2))
+
+
+def _flight_times(piece) -> tuple[float, float] | None:
+    """A jump's flight (clip seconds, within the range it plays), None for other clips: it
+    plays at its own pace (a flight lasts what gravity gives it)."""
+    if not piece.span.jumping or piece.contacts is None:
+        return None
+    air = _flight(piece.contacts)
+    if len(air) < 2:
+        return None
+    ft = piece.motion.frame_time
+    end = (piece.motion.frames - 1) * ft if piece.clip_out is None else piece.clip_out
+    lo, hi = max(piece.clip_in, (air[0] - 0.5) * ft), min(end, (air[-1] + 0.5) * ft)
+    return (lo, hi) if hi > lo else None
+
+
+def _make_room(pieces: list, t: np.ndarray, limits: list, stages: list) -> list:
     """One-shot actions given the time they need: a clip that cannot be played in its
-    segment without a joint going faster than a person's (:func:`retarget.sequence.shortest`:
+    segment without a joint going faster than its limit (:func:`retarget.sequence.shortest`:
     a hop performed in half a second, a jump's whole wind-up and landing) starts earlier and
     ends later, in the stands (in-place, non-jumping neighbours) either side — up to
-    :data:`ROOM` of each — rather than whipping through."""
+    :data:`ROOM` of each — and where they are too short, plays less of its preparation and
+    of its return to rest (never of its anticipation, execution or follow-through) rather
+    than whipping through."""
     from retarget.sequence import shortest
 
     pieces = list(pieces)
     for k, pc in enumerate(pieces):
         if pc.cycles != 0 or pc.progress is not None or pc.gesture is not None:
             continue
-        short = 1.1 * shortest(pc.motion, pc.clip_in, pc.clip_out) - (pc.span.t1 - pc.span.t0)
+        need = 1.1 * shortest(pc.motion, pc.clip_in, pc.clip_out, limits[k], _flight_times(pc))
+        short = need - (pc.span.t1 - pc.span.t0)
         if short <= 0:
             continue
         lend = []
@@ -374,8 +408,38 @@ def _make_room(pieces: list, t: np.ndarray) -> list:
             i = int(np.clip(np.searchsorted(t, cut), span.i1, nxt.i1 - 1))
             pieces[k + 1] = replace(pieces[k + 1], span=replace(nxt, t0=cut, i0=i))
             span = replace(span, t1=cut, i1=i)
-        pieces[k] = replace(pc, span=span)
+        pc = replace(pc, span=span)
+        pieces[k] = _trimmed(pc, stages[k], limits[k]) if short > before + after + 1e-9 else pc
     return pieces
+
+
+def _trimmed(piece, stages, limit: float):
+    """A one-shot clip's range cut, from its ends inwards — the preparation from the start,
+    the return to rest from the end, turn about — until it can play in its span within
+    ``limit`` (or only anticipation to follow-through is left)."""
+    from retarget.sequence import shortest
+
+    ft = piece.motion.frame_time
+    lo, hi = piece.clip_in, (piece.motion.frames - 1) * ft if piece.clip_out is None else piece.clip_out
+    first, last = max(lo, stages.preparation * ft), min(hi, stages.follow_through * ft)
+    duration = piece.span.t1 - piece.span.t0
+    while 1.1 * shortest(piece.motion, lo, hi, limit, _flight_times(piece)) > duration and (lo < first or hi > last):
+        if lo < first and (hi <= last or lo - piece.clip_in <= (piece.clip_out or hi) - hi):
+            lo = min(first, lo + ft)
+        else:
+            hi = max(last, hi - ft)
+    return replace(piece, clip_in=lo, clip_out=hi)
+
+
+def _flight(contacts: np.ndarray) -> np.ndarray:
+    """The clip frames of its flight: the longest run with neither foot on the ground."""
+    from retarget.feet import _intervals
+
+    runs = _intervals(~contacts.any(axis=1))
+    if not runs:
+        return np.zeros(0, dtype=int)
+    a, b = max(runs, key=lambda r: r[1] - r[0])
+    return np.arange(a, b)
 
 
 def _in_flight(piece):
@@ -386,7 +450,7 @@ def _in_flight(piece):
     contacts = piece.contacts
     if contacts is None or not len(contacts):
         return piece.span
-    air = np.flatnonzero(~contacts.any(axis=1))
+    air = _flight(contacts)
     if not len(air):
         return piece.span
     m = piece.motion
