@@ -207,7 +207,8 @@ def _ground(terrain, xz: np.ndarray) -> np.ndarray:
 
 STEP_SPEED = 3.0  # m/s: a foot's step to a new spot takes at least its length / this (swinging feet
 # peak at 4–5 m/s in real walks)
-STEP_LIFT = 0.05  # m: a foot moved to a new spot lifted less than this (steps lift the ankle 9–14 cm) is shuffled: it is given a step
+STEP_LIFT = 0.05  # m: a foot moved to a new spot lifted less than this is shuffled (steps lift the
+# ankle 9–14 cm): it is given a step
 STEP_APEX = (0.04, 0.10)  # m: the apex of a given step, half its length, within these
 
 

@@ -340,7 +340,7 @@ def _descends(parents, j: int, ancestor: int) -> bool:
     return False
 
 
-ROOM = 0.6  # at most this share of a neighbouring stand is lent to an action that needs the time
+ROOM = 0.6  # at most this share of a neighbouring stand (half of a walk) is lent to an action that needs the time
 
 
 def _speed_limit(piece, track, scale: float) -> float:
@@ -374,8 +374,8 @@ def _make_room(pieces: list, t: np.ndarray, limits: list, stages: list) -> list:
     """One-shot actions given the time they need: a clip that cannot be played in its
     segment without a joint going faster than its limit (:func:`retarget.sequence.shortest`:
     a hop performed in half a second, a jump's whole wind-up and landing) starts earlier and
-    ends later, in the stands (in-place, non-jumping neighbours) either side — up to
-    :data:`ROOM` of each — and where they are too short, plays less of its preparation and
+    ends later, in the stands either side (up to :data:`ROOM` of each) or the walks (half
+    that: a running jump) — and where they are too short, plays less of its preparation and
     of its return to rest (never of its anticipation, execution or follow-through) rather
     than whipping through."""
     from retarget.sequence import shortest
@@ -391,8 +391,9 @@ def _make_room(pieces: list, t: np.ndarray, limits: list, stages: list) -> list:
         lend = []
         for j in (k - 1, k + 1):
             n = pieces[j] if 0 <= j < len(pieces) else None
-            ok = n is not None and n.span.in_place and not n.span.jumping and n.cycles > 0
-            lend.append(ROOM * (n.span.t1 - n.span.t0) if ok else 0.0)
+            ok = n is not None and not n.span.jumping and n.cycles > 0  # a stand, or a walk (a running jump)
+            share = ROOM if ok and n.span.in_place else ROOM / 2
+            lend.append(share * (n.span.t1 - n.span.t0) if ok else 0.0)
         before = min(lend[0], max(short / 2, short - lend[1]))
         after = min(lend[1], short - before)
         span = pc.span

@@ -1,0 +1,171 @@
+"""Compiled animation an animator accepts: the animation check (retarget.qa, calibrated on
+real motion capture) passes on compiled scenes — the main example as the bundled doodle,
+styled by the effort model, on uneven terrain, performed by other people's styles, and
+with a real mocap library — and the mechanisms behind it hold on their own: pacing that
+keeps joints under a person's speed, feet that stand where they land and step instead of
+shuffling, jumps that travel in the air."""
+
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from doodle.app.pipeline import compile_doodle
+from doodle.input.loader import load
+from retarget.qa import check_scene
+
+DEMO = Path(__file__).resolve().parents[1] / "examples" / "demo.doodle"
+BANDAI = Path(__file__).resolve().parents[2] / "shared" / "data" / "mocap" / "bandai" / "dataset-1"
+
+
+def _checked(doodle, **kw):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        results = compile_doodle(doodle, **kw)
+    return results, check_scene({r.track: r.motion for r in results}, kw.get("terrain"),
+                                contacts=results[0].contacts, soles={r.track: r.sole for r in results})
+
+
+def _effort():
+    from laban.models import load as load_model
+
+    return load_model(None)
+
+
+@pytest.mark.parametrize("scene", ["styled by the effort model", "Jacksboro terrain"])
+def test_the_main_example_passes_the_animation_check(scene):
+    from retarget.terrain import parse_terrain
+
+    kw = {"effort_model": _effort()} if scene.startswith("styled") else {"terrain": parse_terrain("jacksboro")}
+    _, checks = _checked(load(DEMO), **kw)
+    c = checks["c0"]
+    assert c.passes, c.summary()
+    assert c.fastest < 15.0 and not c.sliding and not c.hovering
+
+
+@pytest.mark.parametrize("style", ["tempo×1.6", "size×0.5", "flow", "wobble 5°"])
+def test_the_main_example_performed_by_other_styles_passes(style):
+    """Performers the constants were not chosen on: slow and small ones (a jump in half a
+    second borrows time from the stands around it), one without pauses, a wobbly hand."""
+    from doodle.synth.performers import MAIN_EXAMPLE, perform, style_grid
+
+    chosen = next(s for s in style_grid() if s.label() == style)
+    doodle, _ = perform(MAIN_EXAMPLE, chosen, seed=3)
+    _, checks = _checked(doodle, effort_model=_effort())
+    assert checks["c0"].passes, checks["c0"].summary()
+
+
+@pytest.mark.skipif(not BANDAI.exists(), reason="needs ../shared/data/mocap/bandai")
+def test_the_main_example_with_a_real_mocap_library_passes(tmp_path):
+    """Bandai's skeleton (its foot joints inside the shoe, a helper root on the floor) with
+    built-in clips retargeted where it has none."""
+    from retarget.importer import import_library
+
+    import_library(BANDAI, "bandai", tmp_path / "bandai", None, "*_normal_*")
+    results, checks = _checked(load(DEMO), library_dir=tmp_path / "bandai")
+    assert checks["c0"].passes, checks["c0"].summary()
+    assert 0.0 <= results[0].sole < 0.06
+
+
+# --- the mechanisms ------------------------------------------------------------------------
+
+def _clip(name):
+    from library.manifest import builtin
+    from retarget.clips import load_clips
+
+    return load_clips(builtin())[name][0]
+
+
+def _peak(motion, u, knots, duration, fps=30.0):
+    """Fastest joint (m/s) of ``motion`` played through pacing knots over ``duration`` s."""
+    from retarget.sequence import _sample
+    from retarget.skeleton import Motion, end_site_positions, forward_kinematics
+
+    t = np.linspace(0.0, 1.0, int(round(duration * fps)) + 1)
+    trans, rots = _sample(motion, np.interp(t, u, knots))
+    played = Motion(motion.skeleton, trans, rots, 1.0 / fps)
+    world = forward_kinematics(played)
+    points = np.concatenate([world[0]] + [e[:, None] for e in end_site_positions(played, world).values()], axis=1)
+    return float(np.linalg.norm(np.diff(points, axis=0), axis=2).max() * fps)
+
+
+def test_pacing_keeps_joints_under_the_limit_and_the_flight_at_its_own_pace():
+    from retarget.sequence import paced, shortest
+
+    jump = _clip("Jump")
+    m = jump.motion
+    end = (m.frames - 1) * m.frame_time
+    uniform = _peak(m, np.array([0.0, 1.0]), np.array([0.0, end]), 1.0)
+    assert uniform > 15.0  # squeezed evenly into a second, the jump whips
+    flight = (0.85, 1.3)
+    assert shortest(m, natural=flight) < 1.0
+    u, knots = paced(m, 0.0, None, 1.0, 11.0, flight)
+    assert u[0] == 0.0 and u[-1] == pytest.approx(1.0) and np.all(np.diff(u) >= 0)
+    assert _peak(m, u, knots, 1.0) < 12.0
+    inside = (knots[1:] > flight[0]) & (knots[:-1] < flight[1])
+    assert np.allclose(np.diff(u)[inside] * 1.0, np.diff(knots)[inside])  # the flight in real time
+    slow = paced(m, 0.0, None, 2 * end)  # never slowed below its own pace for speed
+    assert np.allclose(slow[0], [0.0, 1.0])
+
+
+def test_a_foot_the_blends_shuffle_takes_a_step_and_does_not_slide():
+    """A standing pose whose right foot the motion drags 30 cm along the floor in three
+    frames: pinned, the foot stands, then steps in an arc over a step's time."""
+    from dataclasses import replace
+
+    from retarget.feet import pin_feet
+    from retarget.qa import check
+    from retarget.skeleton import forward_kinematics
+
+    idle = _clip("Idle")
+    m = idle.motion.slice(0, 1)
+    frames = 40
+    trans = np.repeat(m.translations, frames, axis=0)
+    rots = np.repeat(m.rotations, frames, axis=0)
+    m = replace(m, translations=trans, rotations=rots)
+    feet = [idle.roles["left_foot"], idle.roles["right_foot"]]
+    shift = np.clip((np.arange(frames) - 18) / 3.0, 0.0, 1.0) * 0.3  # the body slides 30 cm right…
+    moved = m.translations.copy()
+    moved[:, 0, 0] -= shift
+    m = replace(m, translations=moved)
+    contacts = np.ones((frames, 2), dtype=bool)
+    contacts[19:21, 1] = False  # …and the clips lift the right foot for two frames only
+    pinned = pin_feet(m, feet, contacts=contacts, standing=None)
+    world = forward_kinematics(pinned)[0]
+    right = world[:, feet[1]]
+    assert right[:, 1].max() - right[0, 1] > 0.04  # lifted in an arc
+    assert np.linalg.norm(right[-1, [0, 2]] - right[0, [0, 2]]) > 0.25  # to its new spot
+    c = check(pinned, ground=0.0)
+    assert not c.sliding and not c.pops, c.summary()
+
+
+def test_a_jump_travels_in_a_straight_line_at_an_even_speed_in_the_air():
+    from retarget.trajectory import Span, world_path
+
+    t = np.linspace(0.0, 1.0, 91)
+    rng = np.random.default_rng(0)
+    p = np.column_stack([0.02 * np.sin(9 * t), 0.1 + 0.05 * np.sin(np.pi * t), 0.08 * t ** 2])  # a wobbly hop
+    p += rng.normal(0.0, 0.001, p.shape)
+    span = Span("Jump", 0.0, 1.0, 0, 91, False, True, False, (0.4, 0.7))
+    path, _ = world_path(t, p, [span], 10.0)
+    u = t / t[-1]
+    before, during, after = u < 0.4, (u > 0.42) & (u < 0.68), u > 0.7
+    assert np.ptp(path[before][:, [0, 2]], axis=0).max() < 1e-9 and np.ptp(path[after][:, [0, 2]], axis=0).max() < 1e-9
+    speed = np.linalg.norm(np.diff(path[during][:, [0, 2]], axis=0), axis=1)
+    assert np.ptp(speed) < 1e-9  # even
+    line = path[-1] - path[0]
+    d, a = path[during][:, [0, 2]] - path[0, [0, 2]], line[[0, 2]] / np.linalg.norm(line[[0, 2]])
+    off = d[:, 0] * a[1] - d[:, 1] * a[0]
+    assert np.abs(off).max() < 1e-9  # straight
+
+
+def test_strides_lengthen_with_speed_within_range():
+    from retarget.sequence import STRIDE_RANGE, stride_scale, travel_curve
+
+    walk = _clip("Walk")
+    natural = travel_curve(walk.motion, walk.roles["pelvis"])[-1] / walk.motion.duration
+    assert stride_scale(walk.motion, walk.roles["pelvis"], natural) == pytest.approx(1.0)
+    assert stride_scale(walk.motion, walk.roles["pelvis"], 1.69 * natural) == pytest.approx(1.3)
+    assert stride_scale(walk.motion, walk.roles["pelvis"], 10 * natural) == pytest.approx(STRIDE_RANGE)
+    assert stride_scale(walk.motion, walk.roles["pelvis"], 0.01 * natural) == pytest.approx(1 / STRIDE_RANGE)
