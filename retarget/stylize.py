@@ -124,7 +124,7 @@ def smooth_edit(original: Motion, edited: Motion, bones: np.ndarray | None = Non
 
 
 def _restore_contacts(before: Motion, after: Motion, world=None) -> Motion:
-    """``after`` with the feet that touched the ground in ``before`` back at their heights
+    """``after`` with the feet that touched the ground in ``before`` back where they stood
     (``world``: ``forward_kinematics(after)`` if the caller has it)."""
     roles = guess_roles(before.skeleton)
     feet = [roles[k] for k in ("left_foot", "right_foot") if k in roles]
@@ -140,8 +140,7 @@ def _restore_contacts(before: Motion, after: Motion, world=None) -> Motion:
         hip = int(before.skeleton.parents[knee]) if knee >= 0 else -1
         if hip < 0:
             continue
-        target = world[0][:, ankle].copy()
-        target[:, 1] = old[:, ankle, 1]
+        target = old[:, ankle]  # where it stood, not only how high: a planted foot neither lifts nor slides
         after = two_bone_ik(after, hip, knee, ankle, target, contact[:, k].astype(float), world=world)
     return after
 

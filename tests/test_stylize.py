@@ -21,8 +21,14 @@ BANDAI = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "mocap
 
 
 def effector(name):
+    """The clip and its acting hand or foot (of the feet, the one that moves: a stomp's
+    stamping foot, not its support)."""
     c = CLIPS[name][0]
-    return c, c.roles["right_hand"] if name in ("Punch", "Throw", "Uppercut Jab") else c.roles["right_foot"]
+    if name in ("Punch", "Throw", "Uppercut Jab"):
+        return c, c.roles["right_hand"]
+    world = forward_kinematics(c.motion)[0]
+    feet = [c.roles["left_foot"], c.roles["right_foot"]]
+    return c, max(feet, key=lambda j: float(np.ptp(world[:, j], axis=0).max()))
 
 
 def path_of(motion, joint, rate=240.0, smooth=0.02):
