@@ -85,10 +85,84 @@ def compiled() -> None:
                 print(_row(f"{name} ({track})", c))
 
 
+def _checked(doodle, **kw):
+    from doodle.app.pipeline import compile_doodle
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        results = compile_doodle(doodle, **kw)
+    return check_scene({r.track: r.motion for r in results}, kw.get("terrain"), contacts=results[0].contacts,
+                       soles={r.track: r.sole for r in results})
+
+
+def performers(seeds=(3, 11)) -> None:
+    """The main example performed by every style of the performer grid (size, tempo,
+    pauses, rate, tilt, wobble, jitter, bobbing, jump arcs and three combinations), styled
+    by the effort model as `doodle compile` does; beside it, the same with feet left as
+    the blended clips put them (no contact pinning, steps or terrain fitting): the floor."""
+    from doodle.synth.performers import MAIN_EXAMPLE, perform, style_grid
+    from laban.models import load as load_model
+
+    model = load_model(None)
+    styles = style_grid()
+    print(f"Animation check on the main example performed by {len(styles)} styles × {len(seeds)} takes "
+          "(effort model on)")
+    ours, floor, failures = [], [], []
+    for style in styles:
+        for seed in seeds:
+            doodle, _ = perform(MAIN_EXAMPLE, style, seed=seed)
+            c = _checked(doodle, effort_model=model)["c0"]
+            ours.append(c)
+            if not c.passes:
+                failures.append(f"    {style.label()} (take {seed}): {c.summary()}")
+            if seed == seeds[0]:
+                floor.append(_checked(doodle, effort_model=model, pin=False)["c0"])
+    for name, rows in (("ours", ours), ("feet not pinned (floor)", floor)):
+        slide = np.array([c.sliding_per_s for c in rows])
+        print(f"  {name:<24} {sum(c.passes for c in rows)}/{len(rows)} pass; sliding median {np.median(slide):.2f} "
+              f"worst {slide.max():.2f} frames/s; with pops {sum(bool(c.pops) for c in rows)}, fastest joint "
+              f"{max(c.fastest for c in rows):.1f} m/s; with one-frame turns {sum(bool(c.turns) for c in rows)}; "
+              f"hovering {sum(bool(c.hovering) for c in rows)}")
+    print("\n".join(failures))
+
+
+def pairs() -> None:
+    """Two characters (generated two-track doodles): Slap, Kiss, and a walk-up–slap–step-back
+    story, in two layouts each."""
+    from scipy.spatial.transform import Rotation
+
+    from doodle.synth.strokes import stroke, synth_doodle
+
+    def scene(a, b, where, turn, seed):
+        def strokes(words):
+            return [stroke("T_STILL", 0.4)] + [stroke(w, 0.3) for w in words] + [stroke("T_STILL", 0.5)]
+
+        return synth_doodle({"c0": strokes(a), "c1": strokes(b)}, seed=seed,
+                            start_p={"c0": (0.0, 1.0, 0.0), "c1": (where[0], 1.0, where[1])},
+                            start_q={"c0": (0.0, 0.0, 0.0, 1.0),
+                                     "c1": tuple(Rotation.from_euler("y", turn, degrees=True).as_quat())})
+
+    kiss, slap = ["T_N_Z", "T_Z", "T_N_Z", "T_Z"], ["T_N_Z", "T_Z"]
+    story = ["T_Z", "T_Z", "T_Z", "T_STILL", "T_N_Z", "T_Z", "T_STILL", "T_N_Z", "T_N_Z"]
+    scenes = {"slap": (slap, [], (0.0, 0.3), 180.0, 1), "slap, B to the side, turned": (slap, [], (-0.12, 0.25), 160.0, 3),
+              "kiss": (kiss, kiss, (0.0, 0.15), 180.0, 2), "kiss, closer": (kiss, kiss, (0.02, 0.1), 175.0, 6),
+              "walk up, slap, step back": (story, [], (0.0, 0.6), 180.0, 1),
+              "walk up from farther, off side": (story[:1] + story, [], (0.08, 0.75), 190.0, 5)}
+    print("Animation check on two-character scenes")
+    for name, args in scenes.items():
+        for track, c in _checked(scene(*args)).items():
+            print(_row(f"{name} ({track})", c) + f"  touching {sum(len(v) for v in c.touching.values())} fr, "
+                  f"contacts missed {len(c.missed)}, reaction leading {len(c.leads)} fr")
+
+
 def main() -> None:
     real()
     print()
     compiled()
+    print()
+    pairs()
+    print()
+    performers()
 
 
 if __name__ == "__main__":

@@ -140,12 +140,14 @@ def retimed(motion: Motion, first: int, last: int, at: int, to: int) -> Motion:
 
 
 def apart(motion: Motion, other: Motion, touching: tuple = (), rounds: int = 8, margin: float = 0.015,
-          sigma: float = 2.0) -> Motion:
+          sigma: float = 2.0, vertical: float = 0.0) -> Motion:
     """``motion`` with its arms bent out of ``other``'s body wherever the animation check's
     capsules (:func:`retarget.qa.capsules`) overlap — an arm's bones pushed off by the
     overlap plus ``margin``, the push eased over a few frames (a Gaussian of ``sigma``
     frames) and followed by the arm's two-bone chain. ``touching``: (joint of motion, joint
-    of other) contact pairs allowed to touch (:attr:`retarget.qa.Limits.touch`)."""
+    of other) contact pairs allowed to touch (:attr:`retarget.qa.Limits.touch`).
+    ``vertical`` (+1 over, −1 under): two embracing characters' arms pass one over the
+    other's instead of being pushed out sideways."""
     from scipy.ndimage import gaussian_filter1d
 
     from retarget.qa import Limits, capsules, closest_points
@@ -172,6 +174,9 @@ def apart(motion: Motion, other: Motion, touching: tuple = (), rounds: int = 8, 
                 k = np.unravel_index(np.argmax(depth), depth.shape)
                 if depth[k] > 0:
                     away = (pa[k] - pb[k]) / max(float(d[k]), 1e-9)
+                    if vertical and ro[k[1]] <= limits.limb:  # an arm against an arm: over or under it
+                        away = away + vertical * np.array([0.0, 1.0, 0.0])
+                        away /= max(float(np.linalg.norm(away)), 1e-9)
                     push[f] = away * (depth[k] + margin)
             if np.any(push):
                 pushed = True

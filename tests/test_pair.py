@@ -60,9 +60,7 @@ def _check(results):
     return check_scene({r.track: r.motion for r in results}, contacts=results[0].contacts)
 
 
-@pytest.mark.parametrize("name", [n for n in SCENES if n != "kiss"] + [
-    pytest.param("kiss", marks=pytest.mark.xfail(strict=True, reason="the Kiss clip's embracing arms still cross "
-                                                 "the partner's for ~3 frames (heads touch correctly)"))])
+@pytest.mark.parametrize("name", list(SCENES))
 def test_no_interpenetration(name):
     checks = _check(compiled(name))
     assert not any(checks["c0"].touching.values()), checks["c0"].touching

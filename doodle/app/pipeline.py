@@ -671,7 +671,8 @@ def _contacts(results: list, recognised: dict, interactions: dict, chosen: dict)
 
 def _apart(results: list, recognised: dict, contacts: tuple) -> None:
     """Interacting characters' arms bent out of each other's bodies (retarget.contact.apart):
-    the receiver's first, then role 0's; contact joints may touch."""
+    the receiver's first (an arm meeting an arm passes under it), then role 0's (over);
+    contact joints may touch."""
     from retarget.analysis import guess_roles
     from retarget.contact import apart
 
@@ -682,9 +683,9 @@ def _apart(results: list, recognised: dict, contacts: tuple) -> None:
         ra, rb = guess_roles(results[ka].motion.skeleton), guess_roles(results[kb].motion.skeleton)
         pair = (ra.get(joints[0]), rb.get(joints[1])) if joints else (None, None)
         results[kb] = replace(results[kb], motion=apart(results[kb].motion, results[ka].motion,
-                                                        ((pair[1], pair[0]),) if None not in pair else ()))
+                                                        ((pair[1], pair[0]),) if None not in pair else (), vertical=-1.0))
         results[ka] = replace(results[ka], motion=apart(results[ka].motion, results[kb].motion,
-                                                        (pair,) if None not in pair else ()))
+                                                        (pair,) if None not in pair else (), vertical=1.0))
 
 
 def _index_of(segments, seg) -> int | None:
