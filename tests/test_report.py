@@ -38,7 +38,7 @@ def test_compile_report_shape(tmp_path, capsys):
     assert isinstance(track["check"]["passes"], bool) and isinstance(track["check"]["sliding_frames"], list)
     assert isinstance(track["check"]["contacts_missed"], list) and isinstance(track["check"]["reaction_lead_frames"], list)
     assert Path(track["bvh"]).exists() and track["frames"] > 0
-    assert set(track["metrics"]) >= {"foot_skating_m_per_s", "ground_penetration_m", "root_deviation_m",
+    assert set(track["metrics"]) >= {"ground_penetration_m", "root_deviation_m",
                                      "transition_smoothness"}
     for i, s in enumerate(track["segments"]):
         _typed(s, {"index": int, **SEGMENT, "time": float, "weight": float})

@@ -868,19 +868,14 @@ def _compile_skeleton(library, user, clips):
 
 
 def quality(result: Animation) -> dict:
-    """Report metrics: foot skating, ground penetration, root deviation from the path,
-    transition smoothness."""
+    """Report metrics: ground penetration, root deviation from the path, transition
+    smoothness. (Sliding feet, pops and the rest are the animation check's: retarget.qa.)"""
     roles = result.roles
-    from retarget.feet import planted
     from retarget.skeleton import end_site_positions, forward_kinematics
 
     motion = result.motion
     world = forward_kinematics(motion)
     positions = world[0]
-    feet = [roles["left_foot"], roles["right_foot"]]
-    contacts = planted(motion, feet, positions, result.terrain)
-    vel = np.linalg.norm(np.gradient(positions[:, feet][:, :, [0, 2]], motion.frame_time, axis=0), axis=2)
-    skating = float(vel[contacts].mean()) if contacts.any() else 0.0
     ends = end_site_positions(motion, world)
     points = np.concatenate([positions] + [e[:, None] for e in ends.values()], axis=1)
     ground = 0.0 if result.terrain is None else result.terrain.height(points[:, :, [0, 2]])
@@ -893,6 +888,6 @@ def quality(result: Animation) -> dict:
     for b in result.transitions:
         near |= np.abs(times[1:-1] - b) <= 0.15
     smooth = float(acc[near].max() / max(acc[~near].max(), 1e-9)) if near.any() and (~near).any() else None
-    return {"foot_skating_m_per_s": round(skating, 4), "ground_penetration_m": round(max(0.0, -lowest), 4),
+    return {"ground_penetration_m": round(max(0.0, -lowest), 4),
             "root_deviation_m": round(deviation, 4),
             "transition_smoothness": None if smooth is None else round(smooth, 3)}
