@@ -33,10 +33,12 @@ def _angle(u: np.ndarray, v: np.ndarray) -> np.ndarray:
 
 
 def two_bone_ik(motion: Motion, hip: int, knee: int, ankle: int, target: np.ndarray, weight: np.ndarray,
-                world: tuple | None = None) -> Motion:
+                world: tuple | None = None, front: np.ndarray | None = None) -> Motion:
     """The motion with the hip and knee rotated so the ankle reaches ``target`` (F, 3) where
     ``weight`` (F,) is 1 (blended towards it in between, untouched at 0). ``world``: the
-    motion's forward kinematics if already known (only this leg's chain must be current)."""
+    motion's forward kinematics if already known (only this leg's chain must be current).
+    ``front`` (F, 3): the way the knee bends (a leg's: the body's front) wherever the chain
+    is too straight to tell or bends the other way (so a knee never flips backwards)."""
     positions, world = forward_kinematics(motion) if world is None else world
     a, b, c = positions[:, hip], positions[:, knee], positions[:, ankle]
     t = c + (target - c) * weight[:, None]
@@ -49,10 +51,26 @@ def two_bone_ik(motion: Motion, hip: int, knee: int, ankle: int, target: np.ndar
     ac_ab_1 = np.arccos(np.clip((lcb**2 - lab**2 - lat**2) / (-2 * lab * lat), -1, 1))
     ba_bc_1 = np.arccos(np.clip((lat**2 - lab**2 - lcb**2) / (-2 * lab * lcb), -1, 1))
     axis0 = np.cross(c - a, b - a)
-    # a straight leg has no bend plane: bend forward, about the hip's own x axis
-    straight = np.linalg.norm(axis0, axis=1) < 1e-9
-    axis0[straight] = quat.rotate(world[straight, hip], np.tile([1.0, 0.0, 0.0], (int(straight.sum()), 1)))
+    # a nearly straight leg has no reliable bend plane: it keeps the one of the nearest frame
+    # where the knee is clearly bent (so the knee never flips sides between frames); a leg
+    # straight throughout bends about the hip's own x axis
+    bent = np.linalg.norm(axis0, axis=1) > 0.15 * lab * lcb
+    if bent.any():
+        idx = np.flatnonzero(bent)
+        nearest = idx[np.clip(np.searchsorted(idx, np.arange(len(bent))), 0, len(idx) - 1)]
+        before = idx[np.clip(np.searchsorted(idx, np.arange(len(bent))) - 1, 0, len(idx) - 1)]
+        nearest = np.where(np.abs(before - np.arange(len(bent))) < np.abs(nearest - np.arange(len(bent))),
+                           before, nearest)
+        axis0 = np.where(bent[:, None], axis0, axis0[nearest])
+    else:
+        axis0 = quat.rotate(world[:, hip], np.tile([1.0, 0.0, 0.0], (len(axis0), 1)))
     axis0 = _unit(axis0)
+    if front is not None:  # the hinge that bends the knee towards the front
+        natural = np.cross(c - a, front)
+        ok = np.linalg.norm(natural, axis=1) > 1e-6
+        natural = _unit(natural)
+        wrong = ok & (np.sum(axis0 * natural, axis=1) < 0.3)
+        axis0[wrong] = natural[wrong]
     axis1 = np.cross(c - a, t - a)
     axis1 = np.where(np.linalg.norm(axis1, axis=1, keepdims=True) < 1e-12, axis0, _unit(axis1))
     a_inv, b_inv = quat.conjugate(world[:, hip]), quat.conjugate(world[:, knee])
@@ -133,12 +151,13 @@ def pin_feet(motion: Motion, feet: list[int], fade: int = 3, terrain=None, conta
         helds.append(held)
     motion = _lower_to_reach(motion, original, feet, targets, weights)
     world = forward_kinematics(motion)
+    front = _front(motion, world[0], feet)
     for k, ankle in enumerate(feet):
         knee = int(motion.skeleton.parents[ankle])
         hip = int(motion.skeleton.parents[knee]) if knee >= 0 else -1
         if hip < 0 or not weights[k].any():
             continue
-        motion = two_bone_ik(motion, hip, knee, ankle, targets[k], weights[k], world=world)
+        motion = two_bone_ik(motion, hip, knee, ankle, targets[k], weights[k], world=world, front=front)
     if terrain is not None:  # the foot laid along the slope under it
         motion = _soles_on_ground(motion, original, feet, terrain, ground_y)
     world = forward_kinematics(motion)
@@ -149,8 +168,21 @@ def pin_feet(motion: Motion, feet: list[int], fade: int = 3, terrain=None, conta
             continue
         gap = _clearance(motion, world, ankle, terrain) - sole
         target = world[0][:, ankle] - np.outer(gap, [0.0, 1.0, 0.0])
-        motion = two_bone_ik(motion, hip, knee, ankle, target, helds[k] ** 2, world=world)  # down as pins go
+        motion = two_bone_ik(motion, hip, knee, ankle, target, helds[k] ** 2, world=world,  # down as pins go
+                             front=front)
     return motion
+
+
+def _front(motion: Motion, positions: np.ndarray, feet: list[int]) -> np.ndarray | None:
+    """(F, 3) the body's front from its hips (left hip minus right, turned a right angle
+    about the vertical; +x is left), or None without two legs."""
+    if len(feet) != 2:
+        return None
+    hips = [int(motion.skeleton.parents[int(motion.skeleton.parents[a])]) for a in feet]
+    if min(hips) < 0:
+        return None
+    across = positions[:, hips[0]] - positions[:, hips[1]]
+    return _unit(np.cross(across, np.array([0.0, 1.0, 0.0])))
 
 
 def _clearance(motion: Motion, world, ankle: int, terrain) -> np.ndarray:
@@ -262,26 +294,47 @@ def _pins(ankle: np.ndarray, contact: np.ndarray, fade: int, terrain, standing: 
         pin[s:stop] = on
         pin[s:stop, 1] += roll[: stop - s]
         held[s:stop] = 1.0
-        for k in range(1, fade + 1):  # held at the spot while fading in and out
-            w = 1.0 - k / (fade + 1)
-            if s - k >= 0 and w > held[s - k]:
-                pin[s - k], held[s - k] = pin[s], w
-            if stop - 1 + k < frames and w > held[stop - 1 + k]:
-                pin[stop - 1 + k], held[stop - 1 + k] = pin[stop - 1], w
+        # held at the spot while fading in and out, over more frames the farther the foot is
+        # from where the clips put it (it moves there no faster than a step)
+        gap_in = np.linalg.norm((pin[s] - follow[max(s - 1, 0)])[[0, 2]])
+        gap_out = np.linalg.norm((pin[stop - 1] - follow[min(stop, frames - 1)])[[0, 2]])
+        for n, sign, edge in ((_fade(gap_in, fade, fps), -1, s), (_fade(gap_out, fade, fps), 1, stop - 1)):
+            for k in range(1, n + 1):
+                w = 1.0 - k / (n + 1)
+                f = edge + sign * k
+                if 0 <= f < frames and w > held[f]:
+                    pin[f], held[f] = pin[edge], w
     from doodle.core.profiles import min_jerk
 
-    standing = held.copy()
+    standing_w = held.copy()
     for lo, hi, a, b, length in steps:  # a step in an arc from one spot to the next
         u = (np.arange(lo, hi) - lo + 1) / (hi - lo + 1)
         pin[lo:hi] = a + np.outer(min_jerk(np.clip((u - 0.15) / 0.7, 0.0, 1.0)), b - a)  # up, across, down
         pin[lo:hi, 1] += np.clip(length / 2, *STEP_APEX) * np.sin(np.pi * u)
         held[lo:hi] = 1.0
-        standing[lo:hi] = 0.0
+        standing_w[lo:hi] = 0.0
     # fading in and out, the foot is over its spot before it is down on it (and off it only
     # once lifted): horizontally it eases faster than vertically, so it does not land sliding
-    across, down = 1.0 - (1.0 - held) ** 3, held**2
+    sunk = np.zeros(frames, dtype=bool)
+    if standing is not None:  # an ankle the clips (a style) put lower than standing on the floor: raised
+        floor = _ground(terrain, follow[:, [0, 2]]) + standing
+        sunk = follow[:, 1] < floor - 0.02
+        follow[:, 1] = np.where(sunk, floor, follow[:, 1])
+    across, down = _smooth(np.minimum(1.0, 1.5 * held)), _smooth(held)
     target = follow + (pin - follow) * np.column_stack([across, down, across])
-    return target, (np.ones(frames) if rise is not None else (held > 0).astype(float)), standing
+    weight = np.ones(frames) if rise is not None else ((held > 0) | sunk).astype(float)
+    return target, weight, standing_w
+
+
+def _fade(gap: float, fade: int, fps: float) -> int:
+    """Frames a pin fades in or out over: at least ``fade``, more for a foot that has farther
+    to go (no faster than :data:`STEP_SPEED`), at most three times as many."""
+    return int(np.clip(np.ceil(gap / STEP_SPEED * fps), fade, 3 * fade))
+
+
+def _smooth(x: np.ndarray) -> np.ndarray:
+    x = np.clip(x, 0.0, 1.0)
+    return x * x * (3 - 2 * x)
 
 
 def _lower_to_reach(motion: Motion, positions: np.ndarray, feet: list[int], targets: list, weights: list) -> Motion:
