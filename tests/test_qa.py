@@ -124,3 +124,49 @@ def test_a_foot_standing_still_above_a_step_down_hovers():
     assert not check(clip, ground=floor).hovering
     stepped = check(clip, terrain=Step())
     assert len(stepped.hovering) > 0.9 * clip.frames and stepped.highest > 0.045
+
+
+def test_a_flip_is_not_a_turn_but_a_snap_of_heading_is():
+    """Heading read from the pelvis's front and left axes, each as level as it lies: a flip
+    pitches the front through the vertical without turning the character."""
+    from library.manifest import builtin
+    from retarget.clips import load_clips
+
+    clips = load_clips(builtin())
+    for name in ("Flip", "Back Flip"):
+        assert not check(clips[name][0].motion, ground=0.0).turns, name
+    idle = clips["Idle"][0].motion
+    r = idle.rotations.copy()
+    snap = quat.exp(np.array([0.0, np.radians(30.0), 0.0]))
+    r[40:, 0] = quat.multiply(np.tile(snap, (idle.frames - 40, 1)), r[40:, 0])
+    assert check(replace(idle, rotations=r), ground=0.0).turns == (40,)
+
+
+def test_hovering_is_measured_above_where_the_skeletons_feet_stand():
+    """A skeleton whose lowest foot joint stands 3 cm above the floor (mocap: the joints sit
+    inside the shoe) is not hovering there, and is when raised 3 cm more."""
+    from library.manifest import builtin
+    from retarget.clips import load_clips
+
+    idle = load_clips(builtin())["Idle"][0].motion
+    up = _moved(idle, np.tile([0.0, 0.03, 0.0], (idle.frames, 1)))
+    assert check(up, ground=0.0).hovering and not check(up, ground=0.0, sole=0.03).hovering
+    higher = _moved(idle, np.tile([0.0, 0.06, 0.0], (idle.frames, 1)))
+    assert check(higher, ground=0.0, sole=0.03).hovering
+
+
+def test_a_foot_lifting_off_is_not_sliding_in_the_frame_before():
+    """Sliding is a flat foot moving between two frames it is flat in: a foot still on the
+    floor in the frame before it lifts has not slid."""
+    from library.manifest import builtin
+    from retarget.clips import load_clips
+
+    idle = load_clips(builtin())["Idle"][0].motion
+    n = idle.frames
+    lift = np.zeros((n, 3))
+    lift[30:, 1] = 0.05 * np.minimum(np.arange(n - 30) + 1, 5)  # up 5 cm a frame from frame 30 …
+    lift[30:, 2] = 0.04 * (np.arange(n - 30) + 1)  # … moving forward 1.2 m/s
+    assert not check(_moved(idle, lift), ground=0.0).sliding
+    drag = np.zeros((n, 3))
+    drag[30:, 2] = 0.04 * (np.arange(n - 30) + 1)  # the same without lifting: sliding
+    assert check(_moved(idle, drag), ground=0.0).sliding
