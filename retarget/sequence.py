@@ -192,6 +192,13 @@ def paced(motion: Motion, clip_in: float, clip_out: float | None, duration: floa
         c = (lo + hi) / 2
         lo, hi = (c, hi) if np.maximum(c * step, least).sum() < duration else (lo, c)
     out = np.maximum(hi * step, least)
+    from scipy.ndimage import gaussian_filter1d
+
+    for _ in range(3):  # the rate eased from squeezed to not (no lurch where a hold meets a swing)
+        out = np.maximum(gaussian_filter1d(out, 2.0, mode="nearest"), least)
+        spare = out - least  # the time over the limit each step has: the excess comes out of it
+        if spare.sum() > 1e-12:
+            out = out - spare * min(1.0, max(out.sum() - duration, -np.inf) / spare.sum())
     u = np.concatenate([[0.0], np.cumsum(out)]) / out.sum()
     return u, knots
 
