@@ -3,7 +3,8 @@
 import sys
 
 from bench import (animation_check, bvh_speed, contexter_speed, laban_effort, learning, matcher_speed, performers, real_gestures,
-                   render_speed, replay_latency, segmenter_speed, stages_accuracy, stylize_speed, terrain_speed)
+                   render_speed, replay_latency, segmenter_speed, stages_accuracy, stylize_signatures, stylize_speed,
+                   terrain_speed)
 
 
 def main() -> int:
@@ -23,6 +24,8 @@ def main() -> int:
     terrain_speed.main()
     print()
     stylize_speed.main()
+    print()
+    stylize_signatures.main([])
     print()
     laban_effort.main()
     print()

@@ -72,9 +72,10 @@ def keyframes(results, path) -> Path:
     return path
 
 
-def compare_picture(neutral, styled, effectors: list[int], path, title: str = "") -> Path:
+def compare_picture(neutral, styled, effectors: list[int], path, title: str = "", notes: list[str] | None = None) -> Path:
     """Fig. 5.13-style comparison: neutral and stylised end-effector paths (side view, z
-    forward, y up) and their speeds over normalised time."""
+    forward, y up) and the first effector's speed over time; ``notes``: lines written on
+    the speed plot (the signature measures)."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -101,6 +102,9 @@ def compare_picture(neutral, styled, effectors: list[int], path, title: str = ""
     axes[2].set_ylabel(f"{neutral.skeleton.names[effectors[0]]} speed (m/s)")
     axes[2].legend(fontsize=7)
     axes[2].grid(alpha=0.3)
+    if notes:
+        axes[2].text(0.98, 0.97, "\n".join(notes), transform=axes[2].transAxes, ha="right", va="top", fontsize=7,
+                     bbox={"facecolor": "white", "alpha": 0.8, "edgecolor": "0.7"})
     fig.tight_layout()
     atomic_png(path, lambda name: fig.savefig(name, dpi=90))
     plt.close(fig)

@@ -44,6 +44,7 @@ from scipy.sparse import csr_matrix
 from doodle.core import quat
 from doodle.core.quat import make_continuous
 from retarget.analysis import Stages, foot_contacts, guess_roles, partition
+from retarget.effort_signature import FASTEST, RATE, burst, most_moving, speed_profile
 from retarget.feet import two_bone_ik
 from retarget.skeleton import Motion, forward_kinematics
 
@@ -52,6 +53,11 @@ OVERSAMPLE = 4  # retimed output has 4× a 30 fps clip's frame rate: frames at m
 EDIT_SMOOTHING = 0.05  # s: pose edits are low-passed over this much clip time
 RATE_SMOOTHING = 0.04  # s: the playback rate's changes are smoothed over this much clip time
 MAX_SPEEDUP = 3.0  # Weight retiming plays no frame more than 3× faster (or slower) than the clip
+PIN_FADE = 0.2  # s: a planted foot's pin eases in and out over at least this much output time ...
+PIN_SPEED = 0.5  # m/s: ... and no faster than this pulls the foot to where it stood
+BURST_SHARE = 0.3  # the execution Time retimes: the effector's speed at least this share of its peak
+SPEED_MARGIN = 0.8  # retiming keeps every joint under this share of FASTEST between clip frames
+WIDEN = 0.5  # Weight scales the acting hand or foot's path by 1 + this × L_w (Strong) or 1/(1 − this × L_w) (Light)
 
 
 def _bones(motion: Motion, mode: str) -> np.ndarray:
@@ -62,10 +68,13 @@ def _bones(motion: Motion, mode: str) -> np.ndarray:
     pelvis = roles.get("pelvis", 0)
     carriers = {0, pelvis} if motion.skeleton.parents[pelvis] < 0 else set(range(pelvis + 1))
     if mode == "full" or not {"pelvis", "chest", "head"} <= set(roles):
-        chosen = range(len(motion.skeleton))
+        chosen = range(len(motion.skeleton)) if mode != "limbs" else []
     else:
         parts = partition(motion.skeleton, roles["pelvis"], roles["chest"], roles["head"])
-        chosen = parts["spine"] + parts["primary"]
+        if mode == "limbs":  # the primary bones' children: upper arms (under clavicles), shins (under thighs)
+            chosen = [c for p in parts["primary"] for c in motion.skeleton.children(p) if c not in parts["spine"]]
+        else:
+            chosen = parts["spine"] + parts["primary"]
     return np.array([b for b in chosen if b not in carriers], dtype=int)
 
 
@@ -79,13 +88,16 @@ def _slerp_identity(q: np.ndarray, w) -> np.ndarray:
 
 
 def motion_scale(motion: Motion, start: int, end: int, c: float, mode: str = "partial",
-                 keep_contacts: bool = True, smooth: bool = True) -> Motion:
-    """Eq. 5.1 over frames [start, end), cohesion (eq. 5.2) after it, the edit smoothed
-    (:func:`smooth_edit`) and contacts restored."""
+                 keep_contacts: bool = True, smooth: bool = True, fade_end: int | None = None,
+                 bones: np.ndarray | None = None) -> Motion:
+    """Eq. 5.1 over frames [start, end), cohesion (eq. 5.2) after it — the change at ``end``
+    fading out by ``fade_end`` (default the clip's end) —, the edit smoothed
+    (:func:`smooth_edit`) and contacts restored. ``bones``: the joints scaled, instead of
+    those ``mode`` chooses."""
     if c == 1.0 or end - start < 2:
         return motion
     end = min(end, motion.frames)
-    bones = _bones(motion, mode)
+    bones = _bones(motion, mode) if bones is None else np.asarray(bones, dtype=int)
     rots, trans = motion.rotations.copy(), motion.translations.copy()
     q0 = np.broadcast_to(rots[start, bones], (end - start, len(bones), 4))
     r = quat.multiply(q0, quat.conjugate(rots[start:end, bones]))  # q(ts) q(t)^-1
@@ -93,7 +105,8 @@ def motion_scale(motion: Motion, start: int, end: int, c: float, mode: str = "pa
     trans[start:end, bones] = trans[start, bones] + c * (trans[start:end, bones] - trans[start, bones])
     if end < motion.frames:  # cohesion: the change at the end fades out over the rest
         last = end - 1
-        w = 1.0 - (np.arange(end, motion.frames) - last) / max(motion.frames - 1 - last, 1)
+        stop = motion.frames if fade_end is None else int(np.clip(fade_end, end, motion.frames))
+        w = np.clip(1.0 - (np.arange(end, motion.frames) - last) / max(stop - 1 - last, 1), 0.0, 1.0)
         delta = quat.multiply(rots[last, bones], quat.conjugate(motion.rotations[last, bones]))
         delta = np.where(delta[:, 3:4] < 0, -delta, delta)
         fade = quat.exp(quat.log(delta)[None] * w[:, None, None])
@@ -123,26 +136,52 @@ def smooth_edit(original: Motion, edited: Motion, bones: np.ndarray | None = Non
     return replace(edited, rotations=rots, translations=trans)
 
 
-def _restore_contacts(before: Motion, after: Motion, world=None) -> Motion:
-    """``after`` with the feet that touched the ground in ``before`` back where they stood
-    (``world``: ``forward_kinematics(after)`` if the caller has it)."""
+def _restore_contacts(before: Motion, after: Motion, world=None, clip_frames: np.ndarray | None = None) -> Motion:
+    """``after`` with the feet that stood on the ground in ``before`` back where they stood:
+    on each run of contact frames the ankle is pinned at the run's median place on the floor
+    (at the neutral's height, frame by frame) — so a planted foot neither lifts nor slides,
+    however the clip is retimed — and the pin eases in and out over :data:`PIN_FADE` seconds
+    of ``after`` either side. ``clip_frames``: the (fractional) frame of ``before`` each
+    frame of ``after`` shows (default: the same frames); ``world``:
+    ``forward_kinematics(after)`` if the caller has it."""
     roles = guess_roles(before.skeleton)
     feet = [roles[k] for k in ("left_foot", "right_foot") if k in roles]
     if not feet:
         return after
     old = forward_kinematics(before)[0]
     contact = foot_contacts(before, feet, world=old)
+    f = np.arange(after.frames, dtype=float) if clip_frames is None else np.asarray(clip_frames, dtype=float)
+    nearest = np.clip(np.rint(f).astype(int), 0, before.frames - 1)
     world = world or forward_kinematics(after)  # the legs are separate chains: one pass serves both
+    frames = np.arange(after.frames)
     for k, ankle in enumerate(feet):
-        if not contact[:, k].any():
-            continue
         knee = int(before.skeleton.parents[ankle])
         hip = int(before.skeleton.parents[knee]) if knee >= 0 else -1
-        if hip < 0:
+        if hip < 0 or not contact[:, k].any():
             continue
-        target = old[:, ankle]  # where it stood, not only how high: a planted foot neither lifts nor slides
-        after = two_bone_ik(after, hip, knee, ankle, target, contact[:, k].astype(float), world=world)
+        height = np.interp(f, np.arange(before.frames), old[:, ankle, 1])
+        weight, pull, target = np.zeros(after.frames), np.zeros(after.frames), np.zeros((after.frames, 3))
+        for a, b in _runs(contact[nearest, k]):
+            spot = np.median(old[nearest[a:b], ankle], axis=0)
+            gap = np.linalg.norm(world[0][[a, b - 1], ankle] - spot, axis=1)  # how far the pin pulls at its ends
+            fade = np.maximum(PIN_FADE, gap / PIN_SPEED) / after.frame_time
+            d = np.maximum(a - frames, frames - (b - 1))
+            f_ = np.where(d < 0, fade[0], np.where(frames < a, fade[0], fade[1]))
+            w = np.where(d <= 0, 1.0, np.where(d < f_, 0.5 + 0.5 * np.cos(np.pi * np.maximum(d, 0) / f_), 0.0))
+            weight = np.maximum(weight, w)  # between two stances the pin glides from one spot to the next
+            pull += w
+            target += w[:, None] * spot
+        target = target / np.maximum(pull, 1e-9)[:, None]
+        target[:, 1] = height
+        if weight.any():
+            after = two_bone_ik(after, hip, knee, ankle, target, weight, world=world)
     return after
+
+
+def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
+    """[start, end) of each run of True."""
+    edges = np.diff(np.concatenate([[0], mask.astype(np.int8), [0]]))
+    return list(zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)))
 
 
 def retime(motion: Motion, clip_to_out, oversample: int = 1) -> Motion:
@@ -154,13 +193,18 @@ def retime(motion: Motion, clip_to_out, oversample: int = 1) -> Motion:
     frames; quaternions sign-continuous, then normalised) are interpolated smoothly: linear
     interpolation would play a slowed clip as straight pieces with a velocity kink at every
     original frame, which is a train of jerk spikes."""
-    if motion.frames < 2:
-        return motion
+    return _retimed(motion, clip_to_out, oversample)[0]
+
+
+def _retimed(motion: Motion, clip_to_out, oversample: int = 1) -> tuple[Motion, np.ndarray]:
+    """:func:`retime`, and the clip time each output frame shows."""
     t = np.arange(motion.frames) * motion.frame_time
+    if motion.frames < 2:
+        return motion, t
     out = np.maximum.accumulate(np.asarray(clip_to_out(t), dtype=float))
     out = out - out[0]
     if out[-1] <= 0:
-        return motion
+        return motion, t
     out = out + np.arange(motion.frames) * 1e-9  # strictly increasing for the inverse
     step = motion.frame_time / oversample
     n = int(np.floor(out[-1] / step + 1e-9)) + 1
@@ -169,7 +213,7 @@ def retime(motion: Motion, clip_to_out, oversample: int = 1) -> Motion:
     poses = _catmull_rom(np.concatenate([motion.translations, make_continuous(motion.rotations)], axis=2),
                          clip_t / motion.frame_time)
     rots = poses[..., 3:] / np.linalg.norm(poses[..., 3:], axis=-1, keepdims=True)
-    return replace(motion, translations=np.ascontiguousarray(poses[..., :3]), rotations=rots, frame_time=step)
+    return replace(motion, translations=np.ascontiguousarray(poses[..., :3]), rotations=rots, frame_time=step), clip_t
 
 
 def _catmull_rom(frames: np.ndarray, f: np.ndarray) -> np.ndarray:
@@ -240,26 +284,101 @@ def reshape(motion: Motion, start: int, end: int, angle: float, shape: str = "ve
     return replace(motion, rotations=rots)
 
 
-def _time_poses(motion: Motion, stages: Stages, lt: float) -> Motion:
-    """Time's motion scale: preparation and anticipation scaled down fully by 1/(3|L_t| + 1)."""
+def _execution(motion: Motion, stages: Stages, world: np.ndarray | None = None) -> tuple[int, int, int]:
+    """(anticipation start, execution start, execution end) in clip frames. The execution is
+    the burst of the clip's most moving hand or foot (:func:`~retarget.effort_signature.most_moving`)
+    around its peak speed, where its speed is at least :data:`BURST_SHARE` of the peak — the
+    stages may put it elsewhere, the effector does not. The anticipation ends where the
+    execution starts, and starts where the stages say if their anticipation ends within one
+    execution's length of it, else one execution's length earlier."""
+    j = most_moving(motion, world)
+    tt, v = speed_profile(motion, j, world)
+    s, _, e = burst(v, BURST_SHARE)
+    start, end = (int(np.clip(round(x / RATE / motion.frame_time), 0, motion.frames - 1)) for x in (s, e))
+    end = max(end, start + 2)
+    span = end - start
+    fits = abs(stages.anticipation - start) <= span and stages.preparation < start
+    return (stages.preparation if fits else max(0, start - span)), start, min(end, motion.frames)
+
+
+def _time_poses(motion: Motion, spans: tuple[int, int, int], lt: float) -> Motion:
+    """Time's motion scale: the anticipation scaled down fully by 1/(3|L_t| + 1), the change
+    fading out over the execution (so the execution still reaches its neutral pose)."""
+    ant, start, end = spans
     c = 1.0 / (3 * abs(lt) + 1.0)
-    m = motion_scale(motion, 0, max(stages.preparation, 1), c, "full", keep_contacts=False, smooth=False)
-    return motion_scale(m, stages.preparation, max(stages.anticipation, stages.preparation + 1), c, "full",
-                        keep_contacts=False, smooth=False)
+    return motion_scale(motion, ant, max(start, ant + 1), c, "full", keep_contacts=False, smooth=False,
+                        fade_end=end)
 
 
-def _time_map(stages: Stages, frame_time: float, lt: float):
-    """Time's retiming (eq. 5.3): anticipation and execution rates for ``L_t``."""
-    ant = 1.0 / (1.0 - 0.5 * lt) if lt >= 0 else 0.5 * lt + 1.0
-    exe = (1.0 / (2 * lt + 1.0), 1.0 - 0.4 * lt) if lt >= 0 else (1.0 - 2 * lt, 1.0 - 0.4 * lt)
-    return stage_retiming(stages, frame_time, {"anticipation": (ant, 1.0), "execution": exe})
+def _time_rates(motion: Motion, spans: tuple[int, int, int], lt: float, speed: np.ndarray) -> np.ndarray:
+    """Time's playback rate (clip seconds per output second) over each clip frame interval:
+    1 outside the anticipation and execution; the anticipation at ``1 − 0.5 L_t`` (Sudden:
+    longer) or ``1/(1 + 0.5 L_t)`` (Sustained: shorter); the execution ``1 + 2 L_t`` times as
+    fast on average, accelerating from ⅔ to 4⁄3 of that (Sudden), or ``1 + 2|L_t|`` times as
+    long, evened out — slow parts played relatively faster, ``∝ (v̄/v)^{|L_t|/2}`` of the
+    effector's speed ``v`` — and nowhere faster than the neutral (Sustained) (eq. 5.3's
+    intent, without its power law's stop at the execution's start)."""
+    ant, start, end = spans
+    rate = np.ones(motion.frames - 1)
+    rate[ant:start] = 1.0 - 0.5 * lt if lt >= 0 else 1.0 / (1.0 + 0.5 * lt)
+    n = max(end - start, 1)
+    u = (np.arange(n) + 0.5) / n
+    if lt > 0:
+        rate[start:end] = (1 + 2 * lt) * (1 + (2 / 3) * lt * (u[: len(rate[start:end])] - 0.5))
+    else:
+        v = np.maximum(speed[start:end], 0.1 * speed.max() + 1e-9)
+        r = np.power(v.mean() / v, 0.5 * abs(lt))
+        r *= (1.0 / (1 + 2 * abs(lt))) / (1.0 / np.mean(1.0 / r))
+        rate[start:end] = np.minimum(r, 1.0)[: len(rate[start:end])]
+    return rate
 
 
-def _weight_poses(motion: Motion, stages: Stages, lw: float) -> Motion:
-    """Weight's partial motion scale of the whole clip and its Vertical-shape shift."""
+def _weight_poses(motion: Motion, spans: tuple[int, int, int], lw: float, effector: int) -> Motion:
+    """Weight's partial motion scale of the whole clip (spine and primary bones by ``1 + L_w``
+    or ``1/(1 − L_w)``; the legs only when a foot acts — ``effector``, a kick —: a step's
+    swing scaled would land the foot elsewhere), the acting hand or foot's path widened or
+    narrowed (:func:`_widen`) and the Vertical-shape shift over the execution."""
     c = 1.0 + lw if lw > 0 else 1.0 / (1.0 - lw)
-    m = motion_scale(motion, 0, motion.frames, c, "partial", keep_contacts=False, smooth=False)
-    return reshape(m, stages.anticipation, stages.execution, 0.1 * lw, "vertical")
+    keep = _leg_bones(motion) if effector not in _leg_bones(motion) else set()
+    bones = np.array([b for b in _bones(motion, "partial") if b not in keep], dtype=int)
+    m = motion_scale(motion, 0, motion.frames, c, "partial", keep_contacts=False, smooth=False, bones=bones)
+    k = 1.0 + WIDEN * lw if lw > 0 else 1.0 / (1.0 - WIDEN * lw)
+    m = _widen(m, effector, k)
+    return reshape(m, spans[1], spans[2], 0.1 * lw, "vertical")
+
+
+def _widen(motion: Motion, effector: int, k: float) -> Motion:
+    """The effector's path, relative to the root of its limb (shoulder or hip), scaled by ``k``
+    about its mean over the clip, by two-bone IK on the limb (as far as the limb reaches):
+    the rotations of a scaled shoulder or hip overshoot their direction instead of reaching
+    farther, a scaled path widens the movement itself."""
+    parents = motion.skeleton.parents
+    mid = int(parents[effector])
+    top = int(parents[mid]) if mid >= 0 else -1
+    base = int(parents[top]) if top >= 0 else -1
+    if base < 0 or k == 1.0:
+        return motion
+    world = forward_kinematics(motion)
+    p = world[0]
+    rel = p[:, effector] - p[:, top]
+    centre = rel.mean(axis=0)
+    target = p[:, top] + centre + k * (rel - centre)
+    target[:, 1] = np.maximum(target[:, 1], min(p[:, effector, 1].min(), target[:, 1].max()))  # a foot no lower than it went
+    return two_bone_ik(motion, top, mid, effector, target, np.ones(motion.frames), world=world)
+
+
+def _leg_bones(motion: Motion) -> set:
+    """The legs: the pelvis's children off the spine, and everything under them."""
+    roles = guess_roles(motion.skeleton)
+    if not {"pelvis", "chest", "head"} <= set(roles):
+        return set()
+    spine = partition(motion.skeleton, roles["pelvis"], roles["chest"], roles["head"])["spine"]
+    legs, stack = set(), [c for c in motion.skeleton.children(roles["pelvis"]) if c not in spine]
+    while stack:
+        b = stack.pop()
+        legs.add(b)
+        stack.extend(motion.skeleton.children(b))
+    return legs
 
 
 def _weight_times(world: np.ndarray, times: np.ndarray, lw: float) -> np.ndarray:
@@ -279,6 +398,25 @@ def _weight_times(world: np.ndarray, times: np.ndarray, lw: float) -> np.ndarray
     return times[0] + np.concatenate([[0.0], np.cumsum(dt_out)])
 
 
+def _bounded(times: np.ndarray, world: np.ndarray, keep_duration: bool) -> np.ndarray:
+    """The time map with no joint of ``world`` (F, J, 3) faster than ``SPEED_MARGIN × FASTEST``
+    between two frames (the frames it would play too fast take longer; ``keep_duration``:
+    the others shorter, so the clip keeps its length)."""
+    dt = np.maximum(np.diff(times), 1e-9)
+    least = np.linalg.norm(np.diff(world, axis=0), axis=2).max(axis=1) / (SPEED_MARGIN * FASTEST)
+    total = dt.sum()
+    for _ in range(4):
+        dt = np.maximum(dt, least)
+        free = dt > least * (1 + 1e-6)
+        if not keep_duration or not free.any():
+            break
+        spare = total - dt[~free].sum()
+        if spare <= 0:
+            break
+        dt[free] *= spare / dt[free].sum()
+    return times[0] + np.concatenate([[0.0], np.cumsum(dt)])
+
+
 def _smooth_rate(times: np.ndarray, frame_time: float) -> np.ndarray:
     """The time map with its playback rate smoothed over about ``RATE_SMOOTHING`` seconds
     (in the log domain, the duration kept): eq. 5.3 changes rate abruptly where stages
@@ -294,27 +432,37 @@ def _smooth_rate(times: np.ndarray, frame_time: float) -> np.ndarray:
 def stylize_staged(motion: Motion, stages: Stages, lt: float = 0.0, lw: float = 0.0) -> tuple[Motion, Stages]:
     """Time then Weight (§5.4.3), and the stages moved with the motion.
 
-    Both modifiers' pose edits (motion scales, reshaping) act on the clip's own frames; the
-    feet are put back on the ground once; Weight's retiming reads speeds as they play after
-    Time's; the two time maps are composed and the clip resampled once. Quaternions come
-    back sign-continuous per joint. ``L_t = L_w = 0`` returns the clip itself."""
+    Both modifiers' pose edits (motion scales, reshaping) act on the clip's own frames; Time's
+    playback rates (:func:`_time_rates`) act on the execution burst of the clip's most moving
+    hand or foot (:func:`_execution`); Weight's retiming reads speeds as they play after
+    Time's; the two time maps are composed, bounded so no joint outruns real motion capture
+    (:func:`_bounded`), and the clip resampled once; then the feet that stood in the neutral
+    clip are put back where they stood (:func:`_restore_contacts`, on the output frames).
+    Quaternions come back sign-continuous per joint. ``L_t = L_w = 0`` returns the clip itself."""
     lt, lw = float(np.clip(lt, -1.0, 1.0)), float(np.clip(lw, -1.0, 1.0))
     if (lt == 0.0 and lw == 0.0) or motion.frames < 2:
         return motion, stages
     t = np.arange(motion.frames) * motion.frame_time
+    neutral_world = forward_kinematics(motion)[0]
+    spans = _execution(motion, stages, neutral_world) if motion.frames >= 4 else (0, 0, motion.frames)
     m, times = motion, t
     if lt:
-        m = _time_poses(m, stages, lt)
-        times = _time_map(stages, motion.frame_time, lt)(t)
+        m = _time_poses(m, spans, lt)
+        j = most_moving(motion, neutral_world)
+        tt, v = speed_profile(motion, j, neutral_world)
+        speed = np.interp(t[:-1] + 0.5 * motion.frame_time, tt, v)
+        rate = _time_rates(motion, spans, lt, speed)
+        times = np.concatenate([[0.0], np.cumsum(motion.frame_time / rate)])
     if lw:
-        m = _weight_poses(m, stages, lw)
+        m = _weight_poses(m, spans, lw, most_moving(motion, neutral_world))
     m = smooth_edit(motion, m)
     world = forward_kinematics(m)
-    if lw:  # speeds read before the feet are put back: the contact IK barely moves anything
+    if lw:
         times = _weight_times(world[0], times, lw)
-    m = _restore_contacts(motion, m, world)
     times = _smooth_rate(times, motion.frame_time)
-    out = retime(m, lambda _: times, oversample=_oversample(m))
+    times = _bounded(times, world[0], keep_duration=not lt)
+    out, clip_t = _retimed(m, lambda _: times, oversample=_oversample(m))
+    out = _restore_contacts(motion, out, clip_frames=clip_t / motion.frame_time)
     ends = np.array([stages.preparation, stages.anticipation, stages.execution, stages.follow_through])
     at = np.interp(np.minimum(ends, motion.frames - 1) * motion.frame_time, t, times) - times[0]
     new = np.minimum(np.maximum.accumulate(np.rint(at / out.frame_time).astype(int)), out.frames)

@@ -15,7 +15,8 @@ def add_parser(sub) -> None:
     p.add_argument("--stages", metavar="P,A,E,F", help="frames ending preparation, anticipation, execution, "
                    "follow-through (default: extracted)")
     p.add_argument("-o", "--output", required=True, metavar="OUT.bvh")
-    p.add_argument("--compare", metavar="PNG", help="neutral and stylised side by side, with end-effector paths")
+    p.add_argument("--compare", metavar="PNG", help="neutral and stylised side by side, with end-effector paths and "
+                   "the signature measures (peak speed, execution, extent, impact) of the most moving hand or foot")
     p.add_argument("--cyclic", action="store_true",
                    help="a cycle (a walk): Weight as upper-body swing and posture only, no retiming; Time ignored")
     p.set_defaults(run=cmd_stylize)
@@ -52,9 +53,18 @@ def cmd_stylize(args) -> int:
           f"{motion.duration:.2f} s), time {args.time:+g}, weight {args.weight:+g}; stages "
           f"{found.preparation},{found.anticipation},{found.execution},{found.follow_through}")
     if args.compare:
+        from retarget.effort_signature import signature
         from retarget.preview import compare_picture
 
         roles = guess_roles(motion.skeleton)
-        effectors = [roles[k] for k in ("right_hand", "left_hand", "right_foot", "left_foot") if k in roles]
-        print(compare_picture(motion, out, effectors, args.compare, f"time {args.time:+g}, weight {args.weight:+g}"))
+        before = signature(motion)
+        after = signature(out, before.effector)
+        effectors = [before.effector] + [roles[k] for k in ("right_hand", "left_hand", "right_foot", "left_foot")
+                                         if k in roles and roles[k] != before.effector]
+        lines = [f"{label}: {getattr(before, k):.2f} → {getattr(after, k):.2f} {unit} (×{getattr(after, k) / max(getattr(before, k), 1e-9):.2f})"
+                 for label, k, unit in (("peak speed", "peak_speed", "m/s"), ("execution", "execution", "s"),
+                                        ("extent", "extent", "m"), ("impact", "sharpness", "m/s²"))]
+        print(compare_picture(motion, out, effectors, args.compare, f"time {args.time:+g}, weight {args.weight:+g}",
+                              notes=[f"{motion.skeleton.names[before.effector]}, neutral → styled"] + lines))
+        print("  " + "; ".join(lines))
     return 0

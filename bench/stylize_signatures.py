@@ -1,0 +1,131 @@
+"""Time and Weight signatures on real motion capture (thesis §5.4.3, Figs. 5.13–5.16).
+
+For each clip and each style (Time ±1, Weight ±1): the measures of
+:mod:`retarget.effort_signature` on the clip's most moving hand or foot, neutral → styled,
+whether the style shows its signature (every measure the right way, no joint faster than
+:data:`~retarget.effort_signature.FASTEST`), the share of time a flat foot slides
+(``retarget.qa.check``, neutral vs styled) and the pops (joints > 15 m/s between frames).
+
+Held out: the nine Bandai dataset-1 ``*_normal_001`` one-shots the issue named (bow, bye,
+byebye, call, guide, kick, punch, respond, slash) — no constant was chosen on them. Tuning
+clips (``--tuning``): Bandai dataset-1 ``call/punch/slash_normal_002`` and dataset-2's
+raise-up and wave clips. Also prints the fastest hands and feet of the real clips (the
+calibration of the speed bound).
+"""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from retarget.analysis import guess_roles, stages
+from retarget.bvh import read_bvh
+from retarget.effort_signature import FASTEST, SIGNATURES, THESIS, quality, shows, signature
+from retarget.qa import check
+from retarget.stylize import stylize
+
+MOCAP = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "mocap"
+BANDAI = MOCAP / "bandai"
+HELD_OUT = ("bow", "bye", "byebye", "call", "guide", "kick", "punch", "respond", "slash")
+TUNING = ("dataset-1/dataset-1_call_normal_002", "dataset-1/dataset-1_punch_normal_002",
+          "dataset-1/dataset-1_slash_normal_002", "dataset-2/dataset-2_raise-up-both-hands_normal_001",
+          "dataset-2/dataset-2_raise-up-right-hand_normal_002", "dataset-2/dataset-2_wave-both-hands_normal_001",
+          "dataset-2/dataset-2_wave-right-hand_normal_002")
+STYLES = ((1.0, 0.0), (-1.0, 0.0), (0.0, 1.0), (0.0, -1.0))
+
+
+def held_out_paths() -> list[Path]:
+    return [BANDAI / "dataset-1" / f"dataset-1_{c}_normal_001.bvh" for c in HELD_OUT]
+
+
+def tuning_paths() -> list[Path]:
+    return [BANDAI / f"{c}.bvh" for c in TUNING]
+
+
+def sliding_share(motion) -> float:
+    """Share of the clip's frames in which a flat foot slides (``retarget.qa.check``)."""
+    return len(check(motion).sliding) / max(motion.frames, 1)
+
+
+def evaluate(motion, lt: float, lw: float) -> dict:
+    """One clip, one style: neutral and styled measures, signature shown, feet, pops."""
+    neutral = signature(motion)
+    styled_motion = stylize(motion, stages(motion), lt, lw)
+    styled = signature(styled_motion, neutral.effector)
+    c = check(styled_motion)
+    name = quality(lt, lw)
+    return {"quality": name, "neutral": neutral, "styled": styled, "shows": shows(neutral, styled, name),
+            "slide_neutral": sliding_share(motion), "slide_styled": len(c.sliding) / styled_motion.frames,
+            "pops": len(c.pops)}
+
+
+def row(clip: str, r: dict) -> str:
+    n, s = r["neutral"], r["styled"]
+    keys = SIGNATURES[r["quality"]]
+    cells = []
+    for k, unit in (("peak_speed", "m/s"), ("execution", "s"), ("extent", "m"), ("sharpness", "m/s²")):
+        mark = "*" if k in keys else " "
+        cells.append(f"{mark}{getattr(n, k):5.2f}→{getattr(s, k):5.2f}")
+    return (f"  {clip:<28} {r['quality']:<9} " + " ".join(cells) + f"  {s.fastest:5.1f}"
+            f"  {'yes' if r['shows'] else 'NO ':<4} {100 * r['slide_neutral']:4.1f}%→{100 * r['slide_styled']:4.1f}%"
+            f"  {r['pops']}")
+
+
+def table(paths: list[Path], title: str) -> tuple[int, int]:
+    print(title)
+    print(f"  {'clip':<28} {'quality':<9} {'peak m/s':>12} {'execution s':>12} {'extent m':>12} "
+          f"{'sharp m/s²':>12} {'fast':>5}  sig  slide n→s     pops")
+    shown = total = 0
+    for path in paths:
+        if not path.exists():
+            continue
+        motion = read_bvh(path)
+        clip = path.stem.replace("_normal", "").replace("dataset-", "d")
+        for lt, lw in STYLES:
+            r = evaluate(motion, lt, lw)
+            print(row(clip, r))
+            shown += r["shows"] and r["pops"] == 0 and r["slide_styled"] <= r["slide_neutral"] + 1e-9
+            total += 1
+    print(f"  signature shown with feet and pops kept: {shown} of {total}")
+    return shown, total
+
+
+def fastest_real() -> None:
+    """The fastest hands and feet (joints, between frames) of the real clips: the bound's calibration."""
+    best = {}
+    for path in sorted(BANDAI.glob("dataset-*/*.bvh")) + sorted((MOCAP / "deepmimic").glob("*.bvh")):
+        m = read_bvh(path)
+        from retarget.skeleton import forward_kinematics
+
+        w = forward_kinematics(m)[0]
+        roles = guess_roles(m.skeleton)
+        ends = [roles[k] for k in ("right_hand", "left_hand", "right_foot", "left_foot") if k in roles]
+        v = float((np.linalg.norm(np.diff(w[:, ends], axis=0), axis=2) / m.frame_time).max())
+        best[path.parent.name + "/" + path.stem] = v
+    top = sorted(best.items(), key=lambda kv: -kv[1])[:3]
+    print(f"Fastest real hands/feet: " + ", ".join(f"{k} {v:.1f} m/s" for k, v in top)
+          + f"; the bound FASTEST = {FASTEST:g} m/s")
+
+
+def main(argv: list[str] | None = None) -> None:
+    argv = sys.argv[1:] if argv is None else argv
+    if not BANDAI.exists():
+        print(f"Stylisation signatures: no motion capture under {BANDAI} (skipped)")
+        return
+    print("Stylisation signatures (thesis Figs. 5.13–5.16), most moving hand or foot, neutral → styled")
+    for name, text in THESIS.items():
+        print(f"  thesis, {name:<9}: {text}; measured: "
+              + ", ".join(f"{k} {'up' if d > 0 else 'down'}" for k, d in SIGNATURES[name].items()))
+    print("  (* the measures of the style's signature; fast: the styled clip's fastest joint, m/s)")
+    if "--tuning" in argv or "--tuning-only" in argv:
+        table(tuning_paths(), "Tuning clips (constants chosen on these)")
+    if "--tuning-only" not in argv:
+        table(held_out_paths(), "Held out: Bandai dataset-1 *_normal_001")
+    if "--calibrate" in argv:
+        fastest_real()
+
+
+if __name__ == "__main__":
+    main()
