@@ -246,8 +246,6 @@ def extreme_stages(motion: Motion, p: float = 0.15) -> Stages:
     return Stages(*ends, n)
 
 
-
-
 # Chosen on the "tune" clips of bench/stage_labels.toml (dataset-1), among the settings no
 # worse than keyframe reduction on the keyed built-in clips; the held-out clips chose nothing.
 REST = 0.15  # of the speed's range: below it the effector is at rest
@@ -544,21 +542,7 @@ def foot_contacts(motion: Motion, joints: list[int], height: float = 0.03, speed
     height), not its very lowest point: a landing that bends an ankle through it once does
     not lift every stance off the floor."""
     positions = forward_kinematics(motion)[0] if world is None else world
-    parents = motion.skeleton.parents
-
-    def below(j):
-        return [k for k in range(len(parents)) if k == j or _under(parents, k, j)]
-
-    soles = np.stack([positions[:, below(j), 1].min(axis=1) for j in joints], axis=1)
+    soles = np.stack([positions[:, motion.skeleton.subtree(j), 1].min(axis=1) for j in joints], axis=1)
     floor = float(np.percentile(soles.min(axis=1), 5))
     vel = np.linalg.norm(np.gradient(positions[:, joints], motion.frame_time, axis=0), axis=2)
     return (soles - floor <= height) & (vel <= speed)
-
-
-def _under(parents, j: int, ancestor: int) -> bool:
-    j = int(parents[j])
-    while j >= 0:
-        if j == ancestor:
-            return True
-        j = int(parents[j])
-    return False

@@ -190,19 +190,10 @@ def _clearance(motion: Motion, world, ankle: int, terrain) -> np.ndarray:
     under it (negative: into the ground)."""
     from retarget.skeleton import end_site_positions
 
-    parents = motion.skeleton.parents
-    joints = [j for j in range(len(parents)) if _descends(parents, j, ankle)]
+    joints = motion.skeleton.subtree(ankle)
     ends = end_site_positions(motion, world)
     points = [world[0][:, j] for j in joints] + [ends[j] for j in joints if j in ends]
     return np.min([p[:, 1] - _ground(terrain, p[:, [0, 2]]) for p in points], axis=0)
-
-
-def _descends(parents, j: int, ancestor: int) -> bool:
-    while j >= 0:
-        if j == ancestor:
-            return True
-        j = int(parents[j])
-    return False
 
 
 def _soles_on_ground(motion: Motion, original: np.ndarray, feet: list[int], terrain, ground_y=None) -> Motion:

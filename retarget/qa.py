@@ -135,18 +135,9 @@ class Check:
 
 def _foot_points(motion: Motion, positions: np.ndarray, ends: dict, ankle: int) -> np.ndarray:
     """(F, k, 3): the ankle's descendants (toes) and their end sites — the sole's points."""
-    parents = motion.skeleton.parents
-    below = [j for j in range(len(parents)) if _descends(parents, j, ankle) and j != ankle]
+    below = [j for j in motion.skeleton.subtree(ankle) if j != ankle]
     points = [positions[:, j] for j in below] + [ends[j] for j in [ankle, *below] if j in ends]
     return np.stack(points, axis=1) if points else positions[:, [ankle]]
-
-
-def _descends(parents, j: int, ancestor: int) -> bool:
-    while j >= 0:
-        if j == ancestor:
-            return True
-        j = int(parents[j])
-    return False
 
 
 def _runs(mask: np.ndarray) -> list[tuple[int, int]]:

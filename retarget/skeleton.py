@@ -48,6 +48,14 @@ class Skeleton:
     def children(self, j: int) -> list[int]:
         return [int(c) for c in np.flatnonzero(self.parents == j)]
 
+    def subtree(self, j: int) -> list[int]:
+        """Joint ``j`` and every joint below it (parents come first, so one pass finds them)."""
+        inside = np.zeros(len(self.names), dtype=bool)
+        inside[j] = True
+        for k in range(j + 1, len(self.names)):
+            inside[k] = inside[self.parents[k]]
+        return [int(k) for k in np.flatnonzero(inside)]
+
 
 @dataclass(frozen=True, eq=False)
 class Motion:

@@ -253,6 +253,7 @@ def animate(track, tokens, segments, choices, times, skeleton, rest, scale, terr
     to the ground."""
     from retarget.feet import clamp_to_ground, pin_feet
     from retarget.sequence import Placed, contact_states, entry_phase, paced, sequence, stride_scale
+    from retarget.timing import flight_times, in_flight, make_room, speed_limit
     from retarget.trajectory import world_path
 
     placed = [(*_span(seg, track, c), c) for seg, c in zip(segments, choices)]
@@ -269,13 +270,13 @@ def animate(track, tokens, segments, choices, times, skeleton, rest, scale, terr
         pieces.append(Placed(span, clip.motion, clip.roles["pelvis"], cycles, times, driven, travels,
                              gesture=gesture, contacts=clip.contacts))
     pieces = _transition_points(pieces, [c.clip for c in choices])
-    limits = [_speed_limit(pc, track, scale) for pc in pieces]
-    pieces = _make_room(pieces, track.t, limits, [c.clip.stages for c in choices])
+    limits = [speed_limit(pc, _jump_travel(pc.span, track, scale)) for pc in pieces]
+    pieces = make_room(pieces, track.t, limits, [c.clip.stages for c in choices])
     pieces = [replace(pc, pace=paced(pc.motion, pc.clip_in, pc.clip_out, pc.span.t1 - pc.span.t0, limit,
-                                     _flight_times(pc)))
+                                     flight_times(pc)))
               if pc.cycles == 0 and pc.progress is None and pc.gesture is None else pc
               for pc, limit in zip(pieces, limits)]
-    pieces = [replace(pc, span=_in_flight(pc)) if pc.span.jumping else pc for pc in pieces]
+    pieces = [replace(pc, span=in_flight(pc)) if pc.span.jumping else pc for pc in pieces]
     spans = [pc.span for pc in pieces]
     front = quat.rotate(track.q[:1], np.array([[0.0, 0.0, 1.0]]))[0]  # the figurine's front at the start
     path, heading = world_path(track.t, track.p, spans, scale, terrain, jump_arc, origin,
@@ -324,149 +325,18 @@ def _standing(rest, feet: list[int]) -> tuple[list[float], float]:
 
     world = forward_kinematics(rest.motion.slice(0, 1))
     ends = end_site_positions(rest.motion.slice(0, 1), world)
-    parents = rest.motion.skeleton.parents
     lowest = []
     for ankle in feet:
-        below = [j for j in range(len(parents)) if _descends(parents, j, ankle)]
+        below = rest.motion.skeleton.subtree(ankle)
         lowest += [world[0][0, j, 1] for j in below] + [ends[j][0, 1] for j in below if j in ends]
     return [float(world[0][0, a, 1]) for a in feet], max(0.0, float(min(lowest)))
 
 
-def _descends(parents, j: int, ancestor: int) -> bool:
-    while j >= 0:
-        if j == ancestor:
-            return True
-        j = int(parents[j])
-    return False
-
-
-ROOM = 0.6  # at most this share of a neighbouring stand (half of a walk) is lent to an action that needs the time
-
-
-def _speed_limit(piece, track, scale: float) -> float:
-    """How fast (m/s) a one-shot clip's joints may move in its own frame once retimed: a
-    person's fastest (:data:`retarget.sequence.FASTEST`) less, for a jump, the speed its
-    root travels at over the flight (the doodle's distance over the clip's flight time)."""
-    from retarget.sequence import FASTEST
-
-    flight = _flight_times(piece)
-    if flight is None:
-        return FASTEST
-    ground = (track.p[min(piece.span.i1, len(track.p)) - 1] - track.p[piece.span.i0])[[0, 2]] * scale
-    return float(max(FASTEST - np.linalg.norm(ground) / max(flight[1] - flight[0], 1e-9), FASTEST / 2))
-
-
-def _flight_times(piece) -> tuple[float, float] | None:
-    """A jump's flight (clip seconds, within the range it plays), None for other clips: it
-    plays at its own pace (a flight lasts what gravity gives it)."""
-    if not piece.span.jumping or piece.contacts is None:
-        return None
-    air = _flight(piece.contacts)
-    if len(air) < 2:
-        return None
-    ft = piece.motion.frame_time
-    end = (piece.motion.frames - 1) * ft if piece.clip_out is None else piece.clip_out
-    lo, hi = max(piece.clip_in, (air[0] - 0.5) * ft), min(end, (air[-1] + 0.5) * ft)
-    return (lo, hi) if hi > lo else None
-
-
-def _make_room(pieces: list, t: np.ndarray, limits: list, stages: list) -> list:
-    """One-shot actions given the time they need: a clip that cannot be played in its
-    segment without a joint going faster than its limit (:func:`retarget.sequence.shortest`:
-    a hop performed in half a second, a jump's whole wind-up and landing) starts earlier and
-    ends later, in the stands either side (up to :data:`ROOM` of each) or the walks (half
-    that: a running jump) — and where they are too short, plays less of its preparation and
-    of its return to rest (never of its anticipation, execution or follow-through) rather
-    than whipping through."""
-    from retarget.sequence import shortest
-
-    pieces = list(pieces)
-    for k, pc in enumerate(pieces):
-        if pc.cycles != 0 or pc.progress is not None or pc.gesture is not None:
-            continue
-        need = 1.1 * shortest(pc.motion, pc.clip_in, pc.clip_out, limits[k], _flight_times(pc))
-        short = need - (pc.span.t1 - pc.span.t0)
-        if short <= 0:
-            continue
-        lend = []
-        for j in (k - 1, k + 1):
-            n = pieces[j] if 0 <= j < len(pieces) else None
-            ok = n is not None and not n.span.jumping and n.cycles > 0  # a stand, or a walk (a running jump)
-            share = ROOM if ok and n.span.in_place else ROOM / 2
-            lend.append(share * (n.span.t1 - n.span.t0) if ok else 0.0)
-        before = min(lend[0], max(short / 2, short - lend[1]))
-        after = min(lend[1], short - before)
-        span = pc.span
-        if before > 0:
-            prev = pieces[k - 1].span
-            cut = span.t0 - before
-            i = int(np.clip(np.searchsorted(t, cut), prev.i0 + 1, span.i0))
-            pieces[k - 1] = replace(pieces[k - 1], span=replace(prev, t1=cut, i1=i))
-            span = replace(span, t0=cut, i0=i)
-        if after > 0:
-            nxt = pieces[k + 1].span
-            cut = span.t1 + after
-            i = int(np.clip(np.searchsorted(t, cut), span.i1, nxt.i1 - 1))
-            pieces[k + 1] = replace(pieces[k + 1], span=replace(nxt, t0=cut, i0=i))
-            span = replace(span, t1=cut, i1=i)
-        pc = replace(pc, span=span)
-        pieces[k] = _trimmed(pc, stages[k], limits[k]) if short > before + after + 1e-9 else pc
-    return pieces
-
-
-def _trimmed(piece, stages, limit: float):
-    """A one-shot clip's range cut, from its ends inwards — the preparation from the start,
-    the return to rest from the end, turn about — until it can play in its span within
-    ``limit`` (or only anticipation to follow-through is left)."""
-    from retarget.sequence import shortest
-
-    ft = piece.motion.frame_time
-    lo, hi = piece.clip_in, (piece.motion.frames - 1) * ft if piece.clip_out is None else piece.clip_out
-    first, last = max(lo, stages.preparation * ft), min(hi, stages.follow_through * ft)
-    duration = piece.span.t1 - piece.span.t0
-    while 1.1 * shortest(piece.motion, lo, hi, limit, _flight_times(piece)) > duration and (lo < first or hi > last):
-        if lo < first and (hi <= last or lo - piece.clip_in <= (piece.clip_out or hi) - hi):
-            lo = min(first, lo + ft)
-        else:
-            hi = max(last, hi - ft)
-    return replace(piece, clip_in=lo, clip_out=hi)
-
-
-def _flight(contacts: np.ndarray) -> np.ndarray:
-    """The clip frames of its flight: the longest run with neither foot on the ground."""
-    from retarget.feet import _intervals
-
-    runs = _intervals(~contacts.any(axis=1))
-    if not runs:
-        return np.zeros(0, dtype=int)
-    a, b = max(runs, key=lambda r: r[1] - r[0])
-    return np.arange(a, b)
-
-
-def _in_flight(piece):
-    """A jump's span with its travel (``execution``) over the clip's flight — from the
-    frame both feet leave the ground to the frame one lands — as fractions of the range of
-    the clip it plays, so the root travels while the body is in the air and stands still
-    on the ground before and after."""
-    contacts = piece.contacts
-    if contacts is None or not len(contacts):
-        return piece.span
-    air = _flight(contacts)
-    if not len(air):
-        return piece.span
-    m = piece.motion
-    start = piece.clip_in
-    end = (m.frames - 1) * m.frame_time if piece.clip_out is None else piece.clip_out
-    length = max(end - start, 1e-9)
-    take_off = np.clip((air[0] - 0.5) * m.frame_time, start, end)
-    landing = np.clip((air[-1] + 0.5) * m.frame_time, start, end)
-    if landing - take_off < 1e-6:
-        return piece.span
-    if piece.pace is not None:  # retimed unevenly: the span's fractions at those clip times
-        u, clip_times = piece.pace
-        return replace(piece.span, execution=(float(np.interp(take_off, clip_times, u)),
-                                              float(np.interp(landing, clip_times, u))))
-    return replace(piece.span, execution=((take_off - start) / length, (landing - start) / length))
+def _jump_travel(span, track, scale: float) -> float:
+    """Metres a jumping segment's doodle travels over the ground (0 for other segments)."""
+    if not span.jumping:
+        return 0.0
+    return float(np.linalg.norm((track.p[min(span.i1, len(track.p)) - 1] - track.p[span.i0])[[0, 2]]) * scale)
 
 
 TURN_EASE_S = 0.1  # s: the standard deviation of the Gaussian a heading's changes are eased over
