@@ -163,3 +163,29 @@ def test_load_clips_face_front_and_leave_builtin_clips_alone():
     walk = clips["Walk"][0]
     assert np.array_equal(walk.motion.rotations, read_bvh(walk.path).rotations)
     assert abs(walk.travel) < 0.05 and clips["Side Walk Left"][0].travel == pytest.approx(np.pi / 2, abs=0.05)
+
+
+def test_a_skeleton_that_cannot_be_retargeted_onto_holds_the_rest_pose_and_says_so(tmp_path, monkeypatch):
+    """Where the built-in clips cannot be put on a user library's skeleton, compile says so
+    and names the segments that hold its rest pose — no traceback."""
+    folder = BANDAI / "dataset-1"
+    if not folder.exists():
+        pytest.skip("Bandai data not found")
+    import retarget.clips
+    from doodle.app.pipeline import compile_doodle
+    from doodle.input.loader import load
+    from retarget.importer import import_library
+
+    import_library(folder, "bandai", tmp_path / "bandai", None, "*_normal_*")
+
+    def cannot(*_args, **_kw):
+        raise ValueError("no chain from the pelvis to the left hand")
+
+    monkeypatch.setattr(retarget.clips, "retargeted", cannot)
+    with warnings.catch_warnings(record=True) as said:
+        warnings.simplefilter("always")
+        result = compile_doodle(load(ROOT / "examples" / "demo.doodle"), library_dir=tmp_path / "bandai")[0]
+    text = " ".join(str(w.message) for w in said)
+    assert "cannot be retargeted onto its skeleton: no chain from the pelvis to the left hand" in text
+    assert "the library has no clip of Jump on its skeleton: 1 segment holds the rest pose (c0 4.23–5.22 s)" in text
+    assert result.clips["Jump"] is None
