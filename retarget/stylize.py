@@ -565,16 +565,18 @@ def preferred(motion: Motion, stages: Stages, lt: float = 0.0, lw: float = 0.0) 
     reshaping without the modifiers' own retiming — the timing comes from the gesture
     (``doodle compile --style preferred`` retimes one-shots by the hand, §5.3.3). Time
     scales preparation and anticipation down by ``1/(3|L_t| + 1)``; Weight scales the whole
-    clip by ``1 + L_w`` or ``1/(1 − L_w)`` and shifts the posture by ``0.1 L_w``."""
+    clip by ``1 + L_w`` or ``1/(1 − L_w)`` and shifts the posture by ``0.1 L_w``; then the
+    feet that stood in the neutral clip are put back where they stood, as
+    :func:`stylize_staged` does."""
     lt, lw = float(np.clip(lt, -1.0, 1.0)), float(np.clip(lw, -1.0, 1.0))
     m = motion
     if lt:
         c = 1.0 / (3 * abs(lt) + 1.0)
-        m = motion_scale(m, 0, max(stages.anticipation, 1), c, "full")
+        m = motion_scale(m, 0, max(stages.anticipation, 1), c, "full", keep_contacts=False)
     if lw:
-        m = motion_scale(m, 0, m.frames, 1.0 + lw if lw > 0 else 1.0 / (1.0 - lw), "partial")
+        m = motion_scale(m, 0, m.frames, 1.0 + lw if lw > 0 else 1.0 / (1.0 - lw), "partial", keep_contacts=False)
         m = reshape(m, stages.anticipation, stages.execution, 0.1 * lw, "vertical")
-    return m
+    return _restore_contacts(motion, m) if m is not motion else m
 
 
 def cyclic(motion: Motion, lw: float = 0.0) -> Motion:
