@@ -38,7 +38,7 @@ from dataclasses import replace
 
 import numpy as np
 from scipy.interpolate import PchipInterpolator
-from scipy.ndimage import gaussian_filter1d
+from scipy.ndimage import gaussian_filter1d, maximum_filter1d
 from scipy.sparse import csr_matrix
 
 from doodle.core import quat
@@ -56,7 +56,9 @@ MAX_SPEEDUP = 3.0  # Weight retiming plays no frame more than 3× faster (or slo
 PIN_FADE = 0.2  # s: a planted foot's pin eases in and out over at least this much output time ...
 PIN_SPEED = 0.5  # m/s: ... and no faster than this pulls the foot to where it stood
 BURST_SHARE = 0.3  # the execution Time retimes: the effector's speed at least this share of its peak
-SPEED_MARGIN = 0.8  # retiming keeps every joint under this share of FASTEST between clip frames
+SUSTAINED_CAP = 0.9  # Sustained: the effector outside the execution no faster than this share of its peak in it
+SPEED_MARGIN = 0.8  # retiming keeps every joint under this share of FASTEST between clip frames ...
+SPEED_BOUND = 0.95  # ... and the output's, measured after every edit (contact IK too), under this share
 WIDEN = 0.5  # Weight scales the acting hand or foot's path by 1 + this × L_w (Strong) or 1/(1 − this × L_w) (Light)
 
 
@@ -137,45 +139,81 @@ def smooth_edit(original: Motion, edited: Motion, bones: np.ndarray | None = Non
 
 
 def _restore_contacts(before: Motion, after: Motion, world=None, clip_frames: np.ndarray | None = None) -> Motion:
-    """``after`` with the feet that stood on the ground in ``before`` back where they stood:
-    on each run of contact frames the ankle is pinned at the run's median place on the floor
-    (at the neutral's height, frame by frame) — so a planted foot neither lifts nor slides,
-    however the clip is retimed — and the pin eases in and out over :data:`PIN_FADE` seconds
-    of ``after`` either side. ``clip_frames``: the (fractional) frame of ``before`` each
-    frame of ``after`` shows (default: the same frames); ``world``:
-    ``forward_kinematics(after)`` if the caller has it."""
+    """``after`` with the feet that stood on the ground in ``before`` back where they stood
+    (:func:`~retarget.analysis.foot_contacts`): on each run of contact frames the foot's stillest point (ankle or
+    toe: a foot may pivot on its ball) is pinned at the run's median place on the floor —
+    the ankle placed about it as in ``before``, at the neutral's height, and the foot turned
+    as there, frame by frame — so a planted foot neither lifts nor slides, however the clip
+    is retimed; the pin eases in and out over :data:`PIN_FADE` seconds of ``after`` either
+    side. ``clip_frames``: the (fractional) frame of ``before`` each frame of ``after``
+    shows (default: the same frames); ``world``: ``forward_kinematics(after)`` if the
+    caller has it."""
     roles = guess_roles(before.skeleton)
     feet = [roles[k] for k in ("left_foot", "right_foot") if k in roles]
     if not feet:
         return after
-    old = forward_kinematics(before)[0]
-    contact = foot_contacts(before, feet, world=old)
+    old, old_rot = forward_kinematics(before)
     f = np.arange(after.frames, dtype=float) if clip_frames is None else np.asarray(clip_frames, dtype=float)
+    f = np.clip(f, 0, before.frames - 1)
     nearest = np.clip(np.rint(f).astype(int), 0, before.frames - 1)
     world = world or forward_kinematics(after)  # the legs are separate chains: one pass serves both
     frames = np.arange(after.frames)
+    clip = np.arange(before.frames)
     for k, ankle in enumerate(feet):
         knee = int(before.skeleton.parents[ankle])
         hip = int(before.skeleton.parents[knee]) if knee >= 0 else -1
-        if hip < 0 or not contact[:, k].any():
+        points = _foot_joints(before, ankle)
+        contact = foot_contacts(before, [ankle], world=old)[:, 0]
+        if hip < 0 or not contact.any():
             continue
-        height = np.interp(f, np.arange(before.frames), old[:, ankle, 1])
+        at = np.stack([np.interp(f, clip, old[:, j, i]) for j in points for i in range(3)], axis=1)
+        at = at.reshape(after.frames, len(points), 3)  # the foot's joints in ``before``, as ``after`` plays it
         weight, pull, target = np.zeros(after.frames), np.zeros(after.frames), np.zeros((after.frames, 3))
-        for a, b in _runs(contact[nearest, k]):
-            spot = np.median(old[nearest[a:b], ankle], axis=0)
-            gap = np.linalg.norm(world[0][[a, b - 1], ankle] - spot, axis=1)  # how far the pin pulls at its ends
+        for a, b in _runs(contact[nearest]):
+            moved = np.linalg.norm(np.diff(at[a:b], axis=0), axis=2).sum(axis=0) if b - a > 1 else np.zeros(len(points))
+            pivot = int(np.argmin(moved))
+            spot = np.median(at[a:b, pivot], axis=0)
+            place = spot + at[:, 0] - at[:, pivot]  # the ankle about the pinned point
+            gap = np.linalg.norm(world[0][[a, b - 1], ankle] - place[[a, b - 1]], axis=1)  # how far the pin pulls
             fade = np.maximum(PIN_FADE, gap / PIN_SPEED) / after.frame_time
             d = np.maximum(a - frames, frames - (b - 1))
             f_ = np.where(d < 0, fade[0], np.where(frames < a, fade[0], fade[1]))
             w = np.where(d <= 0, 1.0, np.where(d < f_, 0.5 + 0.5 * np.cos(np.pi * np.maximum(d, 0) / f_), 0.0))
             weight = np.maximum(weight, w)  # between two stances the pin glides from one spot to the next
             pull += w
-            target += w[:, None] * spot
+            target += w[:, None] * place
         target = target / np.maximum(pull, 1e-9)[:, None]
-        target[:, 1] = height
+        target[:, 1] = at[:, 0, 1]
         if weight.any():
-            after = two_bone_ik(after, hip, knee, ankle, target, weight, world=world)
+            turned = world[1].copy()  # the foot as it stood in ``before``: its toes neither swing nor slide
+            turned[:, ankle] = _slerp(world[1][:, ankle], _at(old_rot[:, ankle], f), weight)
+            after = two_bone_ik(after, hip, knee, ankle, target, weight, world=(world[0], turned))
     return after
+
+
+def _foot_joints(motion: Motion, ankle: int) -> list[int]:
+    """The ankle and the joints under it (toes), ankle first."""
+    out, stack = [ankle], list(motion.skeleton.children(ankle))
+    while stack:
+        j = stack.pop()
+        out.append(j)
+        stack.extend(motion.skeleton.children(j))
+    return out
+
+
+def _at(q: np.ndarray, f: np.ndarray) -> np.ndarray:
+    """Quaternions (F, 4) at fractional frames ``f``: slerped between the two nearest."""
+    q = make_continuous(q)
+    k = np.clip(np.floor(f).astype(int), 0, len(q) - 1)
+    n = np.minimum(k + 1, len(q) - 1)
+    return _slerp(q[k], q[n], np.clip(f - k, 0.0, 1.0))
+
+
+def _slerp(a: np.ndarray, b: np.ndarray, w: np.ndarray) -> np.ndarray:
+    """Per frame, from rotation ``a`` (F, 4) towards ``b`` by ``w`` (F,)."""
+    d = quat.multiply(b, quat.conjugate(a))
+    d = np.where(d[:, 3:4] < 0, -d, d)
+    return quat.multiply(quat.exp(quat.log(d) * np.asarray(w, dtype=float)[:, None]), a)
 
 
 def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
@@ -330,6 +368,20 @@ def _time_rates(motion: Motion, spans: tuple[int, int, int], lt: float, speed: n
         r = np.power(v.mean() / v, 0.5 * abs(lt))
         r *= (1.0 / (1 + 2 * abs(lt))) / (1.0 / np.mean(1.0 / r))
         rate[start:end] = np.minimum(r, 1.0)[: len(rate[start:end])]
+        rate = _below_execution(rate, speed, start, end)
+    return rate
+
+
+def _below_execution(rate: np.ndarray, speed: np.ndarray, start: int, end: int) -> np.ndarray:
+    """Sustained's rates with the effector nowhere outside the execution faster, as played,
+    than :data:`SUSTAINED_CAP` of its fastest inside it: an anticipation played faster, or a
+    second burst left at its own pace, would otherwise be the clip's fastest and
+    widest-at-half-peak movement, and the slowed execution no longer its main one."""
+    played = rate * speed
+    cap = SUSTAINED_CAP * played[start:end].max() if end > start else np.inf
+    outside = np.ones(len(rate), dtype=bool)
+    outside[start:end] = False
+    rate[outside] = np.minimum(rate[outside], cap / np.maximum(speed[outside], 1e-9))
     return rate
 
 
@@ -398,12 +450,11 @@ def _weight_times(world: np.ndarray, times: np.ndarray, lw: float) -> np.ndarray
     return times[0] + np.concatenate([[0.0], np.cumsum(dt_out)])
 
 
-def _bounded(times: np.ndarray, world: np.ndarray, keep_duration: bool) -> np.ndarray:
-    """The time map with no joint of ``world`` (F, J, 3) faster than ``SPEED_MARGIN × FASTEST``
-    between two frames (the frames it would play too fast take longer; ``keep_duration``:
-    the others shorter, so the clip keeps its length)."""
+def _bounded(times: np.ndarray, least: np.ndarray, keep_duration: bool) -> np.ndarray:
+    """The time map with each clip frame interval lasting at least ``least`` (s) — so no
+    joint outruns the bound there (:func:`_least`) —: the frames it would play too fast
+    take longer (``keep_duration``: the others shorter, so the clip keeps its length)."""
     dt = np.maximum(np.diff(times), 1e-9)
-    least = np.linalg.norm(np.diff(world, axis=0), axis=2).max(axis=1) / (SPEED_MARGIN * FASTEST)
     total = dt.sum()
     for _ in range(4):
         dt = np.maximum(dt, least)
@@ -415,6 +466,24 @@ def _bounded(times: np.ndarray, world: np.ndarray, keep_duration: bool) -> np.nd
             break
         dt[free] *= spare / dt[free].sum()
     return times[0] + np.concatenate([[0.0], np.cumsum(dt)])
+
+
+def _least(world: np.ndarray) -> np.ndarray:
+    """Per clip frame interval of joint positions ``world`` (F, J, 3), the least time it may
+    take for no joint to move faster than ``SPEED_MARGIN × FASTEST``."""
+    return np.linalg.norm(np.diff(world, axis=0), axis=2).max(axis=1) / (SPEED_MARGIN * FASTEST)
+
+
+def _too_fast(out: Motion, clip_t: np.ndarray, clip_frame_time: float, clip_frames: int) -> np.ndarray:
+    """Per clip frame interval, how many times faster than ``SPEED_BOUND × FASTEST`` the
+    fastest joint of the output ``out`` (its frames showing clip times ``clip_t``) moves
+    while it plays that interval (≤ 1 where none does)."""
+    world = forward_kinematics(out)[0]
+    v = np.linalg.norm(np.diff(world, axis=0), axis=2).max(axis=1) / out.frame_time / (SPEED_BOUND * FASTEST)
+    k = np.clip((0.5 * (clip_t[1:] + clip_t[:-1]) / clip_frame_time).astype(int), 0, clip_frames - 2)
+    over = np.zeros(clip_frames - 1)
+    np.maximum.at(over, k, v)
+    return over
 
 
 def _smooth_rate(times: np.ndarray, frame_time: float) -> np.ndarray:
@@ -449,7 +518,7 @@ def stylize_staged(motion: Motion, stages: Stages, lt: float = 0.0, lw: float = 
     if lt:
         m = _time_poses(m, spans, lt)
         j = most_moving(motion, neutral_world)
-        tt, v = speed_profile(motion, j, neutral_world)
+        tt, v = speed_profile(m, j)  # as the anticipation scaled down leaves it
         speed = np.interp(t[:-1] + 0.5 * motion.frame_time, tt, v)
         rate = _time_rates(motion, spans, lt, speed)
         times = np.concatenate([[0.0], np.cumsum(motion.frame_time / rate)])
@@ -460,9 +529,15 @@ def stylize_staged(motion: Motion, stages: Stages, lt: float = 0.0, lw: float = 
     if lw:
         times = _weight_times(world[0], times, lw)
     times = _smooth_rate(times, motion.frame_time)
-    times = _bounded(times, world[0], keep_duration=not lt)
-    out, clip_t = _retimed(m, lambda _: times, oversample=_oversample(m))
-    out = _restore_contacts(motion, out, clip_frames=clip_t / motion.frame_time)
+    least = _least(world[0])
+    for _ in range(5):  # the output measured as it plays — spline, contact IK and all — and slowed where too fast
+        times = _bounded(times, least, keep_duration=not lt)
+        out, clip_t = _retimed(m, lambda _: times, oversample=_oversample(m))
+        out = _restore_contacts(motion, out, clip_frames=clip_t / motion.frame_time)
+        over = _too_fast(out, clip_t, motion.frame_time, motion.frames)
+        if over.max() <= 1.0:
+            break
+        least = np.maximum(least, np.diff(times) * maximum_filter1d(np.maximum(over, 1.0), 3) * 1.02)
     ends = np.array([stages.preparation, stages.anticipation, stages.execution, stages.follow_through])
     at = np.interp(np.minimum(ends, motion.frames - 1) * motion.frame_time, t, times) - times[0]
     new = np.minimum(np.maximum.accumulate(np.rint(at / out.frame_time).astype(int)), out.frames)
@@ -490,16 +565,18 @@ def preferred(motion: Motion, stages: Stages, lt: float = 0.0, lw: float = 0.0) 
     reshaping without the modifiers' own retiming — the timing comes from the gesture
     (``doodle compile --style preferred`` retimes one-shots by the hand, §5.3.3). Time
     scales preparation and anticipation down by ``1/(3|L_t| + 1)``; Weight scales the whole
-    clip by ``1 + L_w`` or ``1/(1 − L_w)`` and shifts the posture by ``0.1 L_w``."""
+    clip by ``1 + L_w`` or ``1/(1 − L_w)`` and shifts the posture by ``0.1 L_w``; then the
+    feet that stood in the neutral clip are put back where they stood, as
+    :func:`stylize_staged` does."""
     lt, lw = float(np.clip(lt, -1.0, 1.0)), float(np.clip(lw, -1.0, 1.0))
     m = motion
     if lt:
         c = 1.0 / (3 * abs(lt) + 1.0)
-        m = motion_scale(m, 0, max(stages.anticipation, 1), c, "full")
+        m = motion_scale(m, 0, max(stages.anticipation, 1), c, "full", keep_contacts=False)
     if lw:
-        m = motion_scale(m, 0, m.frames, 1.0 + lw if lw > 0 else 1.0 / (1.0 - lw), "partial")
+        m = motion_scale(m, 0, m.frames, 1.0 + lw if lw > 0 else 1.0 / (1.0 - lw), "partial", keep_contacts=False)
         m = reshape(m, stages.anticipation, stages.execution, 0.1 * lw, "vertical")
-    return m
+    return _restore_contacts(motion, m) if m is not motion else m
 
 
 def cyclic(motion: Motion, lw: float = 0.0) -> Motion:
