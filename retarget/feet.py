@@ -20,6 +20,7 @@ from dataclasses import replace
 import numpy as np
 
 from doodle.core import quat
+from doodle.core.profiles import min_jerk
 from retarget.analysis import foot_contacts
 from retarget.skeleton import Motion, forward_kinematics
 
@@ -57,11 +58,8 @@ def two_bone_ik(motion: Motion, hip: int, knee: int, ankle: int, target: np.ndar
     bent = np.linalg.norm(axis0, axis=1) > 0.15 * lab * lcb
     if bent.any():
         idx = np.flatnonzero(bent)
-        nearest = idx[np.clip(np.searchsorted(idx, np.arange(len(bent))), 0, len(idx) - 1)]
-        before = idx[np.clip(np.searchsorted(idx, np.arange(len(bent))) - 1, 0, len(idx) - 1)]
-        nearest = np.where(np.abs(before - np.arange(len(bent))) < np.abs(nearest - np.arange(len(bent))),
-                           before, nearest)
-        axis0 = np.where(bent[:, None], axis0, axis0[nearest])
+        nearest = idx[np.abs(idx[None, :] - np.arange(len(bent))[:, None]).argmin(axis=1)]
+        axis0 = axis0[nearest]  # a bent frame is its own nearest
     else:
         axis0 = quat.rotate(world[:, hip], np.tile([1.0, 0.0, 0.0], (len(axis0), 1)))
     axis0 = _unit(axis0)
@@ -168,7 +166,7 @@ def pin_feet(motion: Motion, feet: list[int], fade: int = 3, terrain=None, conta
             continue
         gap = _clearance(motion, world, ankle, terrain) - sole
         target = world[0][:, ankle] - np.outer(gap, [0.0, 1.0, 0.0])
-        motion = two_bone_ik(motion, hip, knee, ankle, target, helds[k] ** 2, world=world,  # down as pins go
+        motion = two_bone_ik(motion, hip, knee, ankle, target, helds[k] ** 4, world=world,  # only a stance: not a lifting foot
                              front=front)
     return motion
 
@@ -250,7 +248,7 @@ def _pins(ankle: np.ndarray, contact: np.ndarray, fade: int, terrain, standing: 
     if rise is not None:
         follow[:, 1] += rise
     height = ankle[:, 1] - _ground(terrain, ankle[:, [0, 2]]) + (0.0 if rise is None else rise)
-    pins = []  # [first, stop, spot (3,), roll (stop - first,)]
+    pins = []  # [first, stop, spot (3,)]
     for s, e in _intervals(contact):
         while s < e:
             spot = ankle[s, [0, 2]]
@@ -259,7 +257,7 @@ def _pins(ankle: np.ndarray, contact: np.ndarray, fade: int, terrain, standing: 
             low = float(height[s:stop].min())
             base = low if standing is None else standing
             on = np.array([spot[0], _ground(terrain, spot[None])[0] + base, spot[1]])
-            pins.append([s, stop, on, np.clip(height[s:stop] - low, 0.0, 0.03)])  # a heel or toe rolling, kept
+            pins.append([s, stop, on])  # (a heel or toe rolling is kept by pin_feet's sole pass)
             s = stop
     steps = []
     for a, b in zip(pins, pins[1:]):
@@ -281,9 +279,8 @@ def _pins(ankle: np.ndarray, contact: np.ndarray, fade: int, terrain, standing: 
                 lo -= 1
         steps.append((lo, hi, a[2], b[2], length))
     pin, held = follow.copy(), np.zeros(frames)
-    for s, stop, on, roll in pins:
+    for s, stop, on in pins:
         pin[s:stop] = on
-        pin[s:stop, 1] += roll[: stop - s]
         held[s:stop] = 1.0
         # held at the spot while fading in and out, over more frames the farther the foot is
         # from where the clips put it (it moves there no faster than a step)
@@ -295,26 +292,24 @@ def _pins(ankle: np.ndarray, contact: np.ndarray, fade: int, terrain, standing: 
                 f = edge + sign * k
                 if 0 <= f < frames and w > held[f]:
                     pin[f], held[f] = pin[edge], w
-    from doodle.core.profiles import min_jerk
-
-    standing_w = held.copy()
+    stance = held.copy()
     for lo, hi, a, b, length in steps:  # a step in an arc from one spot to the next
         u = (np.arange(lo, hi) - lo + 1) / (hi - lo + 1)
         pin[lo:hi] = a + np.outer(min_jerk(np.clip((u - 0.15) / 0.7, 0.0, 1.0)), b - a)  # up, across, down
         pin[lo:hi, 1] += np.clip(length / 2, *STEP_APEX) * np.sin(np.pi * u)
         held[lo:hi] = 1.0
-        standing_w[lo:hi] = 0.0
-    # fading in and out, the foot is over its spot before it is down on it (and off it only
-    # once lifted): horizontally it eases faster than vertically, so it does not land sliding
+        stance[lo:hi] = 0.0
     sunk = np.zeros(frames, dtype=bool)
     if standing is not None:  # an ankle the clips (a style) put lower than standing on the floor: raised
         floor = _ground(terrain, follow[:, [0, 2]]) + standing
         sunk = follow[:, 1] < floor - 0.02
         follow[:, 1] = np.where(sunk, floor, follow[:, 1])
+    # fading in and out, the foot is over its spot before it is down on it (and off it only
+    # once lifted): horizontally it eases faster than vertically, so it does not land sliding
     across, down = _smooth(np.minimum(1.0, 1.5 * held)), _smooth(held)
     target = follow + (pin - follow) * np.column_stack([across, down, across])
     weight = np.ones(frames) if rise is not None else ((held > 0) | sunk).astype(float)
-    return target, weight, standing_w
+    return target, weight, stance
 
 
 def _fade(gap: float, fade: int, fps: float) -> int:
@@ -359,9 +354,8 @@ def clamp_to_ground(motion: Motion, terrain=None) -> Motion:
     None); the lift is eased in and out over a few frames."""
     from scipy.ndimage import gaussian_filter1d, maximum_filter1d
 
-    from retarget.skeleton import end_site_positions
-
     from retarget.analysis import pelvis_of
+    from retarget.skeleton import end_site_positions
 
     world = forward_kinematics(motion)
     body = world[0] if pelvis_of(motion.skeleton) == 0 else world[0][:, 1:]  # not a helper root on the floor

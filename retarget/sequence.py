@@ -17,6 +17,7 @@ joined by blended transitions, into one motion on one timeline.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 from scipy.spatial.transform import Rotation
@@ -152,16 +153,25 @@ def _limits(motion: Motion, clip_in: float, clip_out: float | None, limit: float
     knots = np.clip(np.arange(f0, f1 + 1) * motion.frame_time, clip_in, end)
     if len(knots) < 3:
         return knots, np.diff(knots), np.zeros(max(len(knots) - 1, 0))
-    world = forward_kinematics(motion)
-    ends = end_site_positions(motion, world)
-    positions = np.concatenate([world[0]] + [e[:, None] for e in ends.values()], axis=1)[f0:f1 + 1]
     step = np.diff(knots)
-    speed = np.linalg.norm(np.diff(positions, axis=0), axis=2).max(axis=1) / motion.frame_time
+    speed = _frame_speeds(motion)[f0:f1]
     least = step * np.minimum(speed / limit, 1.0)  # never slower than the clip's own pace
     if natural is not None:  # a flight lasts as long as it does
         inside = (knots[1:] > natural[0] + 1e-9) & (knots[:-1] < natural[1] - 1e-9)
         least[inside] = step[inside]
     return knots, step, least
+
+
+@lru_cache(maxsize=64)
+def _frame_speeds(motion: Motion) -> np.ndarray:
+    """(F − 1,) the fastest joint or end site (m/s) between each two frames of a clip (read
+    many times while a clip is given room and paced: computed once per clip)."""
+    world = forward_kinematics(motion)
+    ends = end_site_positions(motion, world)
+    positions = np.concatenate([world[0]] + [e[:, None] for e in ends.values()], axis=1)
+    speeds = np.linalg.norm(np.diff(positions, axis=0), axis=2).max(axis=1) / motion.frame_time
+    speeds.flags.writeable = False
+    return speeds
 
 
 def shortest(motion: Motion, clip_in: float = 0.0, clip_out: float | None = None, limit: float = FASTEST,
@@ -198,7 +208,7 @@ def paced(motion: Motion, clip_in: float, clip_out: float | None, duration: floa
         out = np.maximum(gaussian_filter1d(out, 2.0, mode="nearest"), least)
         spare = out - least  # the time over the limit each step has: the excess comes out of it
         if spare.sum() > 1e-12:
-            out = out - spare * min(1.0, max(out.sum() - duration, -np.inf) / spare.sum())
+            out = out - spare * min(1.0, (out.sum() - duration) / spare.sum())
     u = np.concatenate([[0.0], np.cumsum(out)]) / out.sum()
     return u, knots
 

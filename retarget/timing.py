@@ -114,22 +114,12 @@ def in_flight(piece):
     frame both feet leave the ground to the frame one lands — as fractions of the range of
     the clip it plays, so the root travels while the body is in the air and stands still
     on the ground before and after."""
-    contacts = piece.contacts
-    if contacts is None or not len(contacts):
-        return piece.span
-    air = flight(contacts)
-    if not len(air):
-        return piece.span
-    m = piece.motion
-    start = piece.clip_in
-    end = (m.frames - 1) * m.frame_time if piece.clip_out is None else piece.clip_out
-    length = max(end - start, 1e-9)
-    take_off = np.clip((air[0] - 0.5) * m.frame_time, start, end)
-    landing = np.clip((air[-1] + 0.5) * m.frame_time, start, end)
-    if landing - take_off < 1e-6:
+    times = flight_times(piece)
+    if times is None:
         return piece.span
     if piece.pace is not None:  # retimed unevenly: the span's fractions at those clip times
         u, clip_times = piece.pace
-        return replace(piece.span, execution=(float(np.interp(take_off, clip_times, u)),
-                                              float(np.interp(landing, clip_times, u))))
-    return replace(piece.span, execution=((take_off - start) / length, (landing - start) / length))
+        return replace(piece.span, execution=tuple(float(np.interp(x, clip_times, u)) for x in times))
+    end = (piece.motion.frames - 1) * piece.motion.frame_time if piece.clip_out is None else piece.clip_out
+    length = max(end - piece.clip_in, 1e-9)
+    return replace(piece.span, execution=tuple((x - piece.clip_in) / length for x in times))
