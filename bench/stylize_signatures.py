@@ -4,7 +4,8 @@ For each clip and each style (Time ±1, Weight ±1): the measures of
 :mod:`retarget.effort_signature` on the clip's most moving hand or foot, neutral → styled,
 whether the style shows its signature (every measure the right way, no joint faster than
 :data:`~retarget.effort_signature.FASTEST`), the share of time a flat foot slides
-(``retarget.qa.check``, neutral vs styled) and the pops (joints > 15 m/s between frames).
+(``retarget.qa.check``, neutral vs styled, both at the styled clip's 120 fps:
+``retarget.stylize.sliding_share``) and the pops (joints > 15 m/s between frames).
 
 Held out: the nine Bandai dataset-1 ``*_normal_001`` one-shots the issue named (bow, bye,
 byebye, call, guide, kick, punch, respond, slash) — no constant was chosen on them. Tuning
@@ -24,7 +25,7 @@ from retarget.analysis import guess_roles, stages
 from retarget.bvh import read_bvh
 from retarget.effort_signature import FASTEST, SIGNATURES, THESIS, quality, shows, signature
 from retarget.qa import check
-from retarget.stylize import stylize
+from retarget.stylize import sliding_share, stylize
 
 MOCAP = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "mocap"
 BANDAI = MOCAP / "bandai"
@@ -44,11 +45,6 @@ def tuning_paths() -> list[Path]:
     return [BANDAI / f"{c}.bvh" for c in TUNING]
 
 
-def sliding_share(motion) -> float:
-    """Share of the clip's frames in which a flat foot slides (``retarget.qa.check``)."""
-    return len(check(motion).sliding) / max(motion.frames, 1)
-
-
 def evaluate(motion, lt: float, lw: float) -> dict:
     """One clip, one style: neutral and styled measures, signature shown, feet, pops."""
     neutral = signature(motion)
@@ -57,7 +53,8 @@ def evaluate(motion, lt: float, lw: float) -> dict:
     c = check(styled_motion)
     name = quality(lt, lw)
     return {"quality": name, "neutral": neutral, "styled": styled, "shows": shows(neutral, styled, name),
-            "slide_neutral": sliding_share(motion), "slide_styled": len(c.sliding) / styled_motion.frames,
+            "slide_neutral": sliding_share(motion, styled_motion.frame_time),
+            "slide_styled": len(c.sliding) / styled_motion.frames,
             "pops": len(c.pops)}
 
 
@@ -105,7 +102,7 @@ def fastest_real() -> None:
         v = float((np.linalg.norm(np.diff(w[:, ends], axis=0), axis=2) / m.frame_time).max())
         best[path.parent.name + "/" + path.stem] = v
     top = sorted(best.items(), key=lambda kv: -kv[1])[:3]
-    print(f"Fastest real hands/feet: " + ", ".join(f"{k} {v:.1f} m/s" for k, v in top)
+    print("Fastest real hands/feet: " + ", ".join(f"{k} {v:.1f} m/s" for k, v in top)
           + f"; the bound FASTEST = {FASTEST:g} m/s")
 
 

@@ -133,6 +133,42 @@ class Check:
                 f"{'passes' if self.passes else 'FAILS'}")
 
 
+def _flat_moves(foot_h: np.ndarray, points: np.ndarray, dt: float, limits: Limits) -> tuple[np.ndarray, np.ndarray]:
+    """For one foot — its points' heights above the ground ``foot_h`` (F, k) and positions
+    ``points`` (F, k, 3) —: per frame, whether it is flat on the floor (every point as low as
+    when the character stands on it, its 10th percentile over the motion; for at least
+    :attr:`Limits.stance`: a swinging foot skimming the floor for a moment is not standing on
+    it), and per pair of consecutive frames how its stillest point moved horizontally (x, z;
+    a foot rolling over its toes or heel keeps one point put: it does not slide). A foot
+    slides between two frames it is flat in: still on the floor in the frame before it lifts,
+    or the frame it lands, it has not slid yet."""
+    flat = (foot_h - np.percentile(foot_h, 10, axis=0) <= limits.flat).all(axis=1)
+    for a, b in _runs(flat):
+        if (b - a) * dt < limits.stance:
+            flat[a:b] = False
+    step = np.diff(points[:, :, [0, 2]], axis=0)  # (F - 1, k, 2)
+    still = np.linalg.norm(step, axis=2).argmin(axis=1)
+    return flat, step[np.arange(len(step)), still]
+
+
+def planted_moves(motion: Motion, world=None, limits: Limits = Limits()) -> tuple[np.ndarray, np.ndarray]:
+    """Motion capture's planted feet, as :func:`check` reads them on the clip's own floor: per
+    frame and foot, whether the foot is flat on the floor (F, feet), and per pair of
+    consecutive frames how its stillest point moved horizontally (F − 1, feet, 2: x, z in
+    metres)."""
+    positions, rotations = world if world is not None else forward_kinematics(motion)
+    ends = end_site_positions(motion, (positions, rotations))
+    roles = guess_roles(motion.skeleton)
+    feet = [roles[k] for k in ("left_foot", "right_foot") if k in roles]
+    if motion.frames < 2 or not feet:
+        n = max(motion.frames - 1, 0)
+        return np.zeros((motion.frames, 0), dtype=bool), np.zeros((n, 0, 2))
+    points = [np.concatenate([positions[:, [a]], _foot_points(motion, positions, ends, a)], axis=1) for a in feet]
+    ground = float(np.percentile(np.min([p[:, 1:, 1].min(axis=1) for p in points], axis=0), 2))
+    pairs = [_flat_moves(p[..., 1] - ground, p, motion.frame_time, limits) for p in points]
+    return np.stack([f for f, _ in pairs], axis=1), np.stack([m for _, m in pairs], axis=1)
+
+
 def _foot_points(motion: Motion, positions: np.ndarray, ends: dict, ankle: int) -> np.ndarray:
     """(F, k, 3): the ankle's descendants (toes) and their end sites — the sole's points."""
     below = [j for j in motion.skeleton.subtree(ankle) if j != ankle]
@@ -179,17 +215,10 @@ def check(motion: Motion, terrain=None, limits: Limits = Limits(), ground: float
         sole_heights.append(sole_h)
         # flat: every point of the foot — ankle, toes, tips — as low as when the character stands
         # on it (its 10th percentile over the motion), so whatever the skeleton puts where
-        foot_h = height(np.concatenate([positions[:, [ankle]], sole], axis=1))
-        flat = (foot_h - np.percentile(foot_h, 10, axis=0) <= limits.flat).all(axis=1)
-        for a, b in _runs(flat):  # a swinging foot skimming the floor for a moment is not standing on it
-            if (b - a) * dt < limits.stance:
-                flat[a:b] = False
-        # a foot slides when no point of it stays put (a foot rolling over its toes or heel does not)
-        points = np.concatenate([positions[:, [ankle]], sole], axis=1)[:, :, [0, 2]]
-        # ... between two frames it is flat in (a foot still on the floor in the frame before it
-        # lifts, or the frame it lands, has not slid yet)
-        moved = np.linalg.norm(np.diff(points, axis=0), axis=2).min(axis=1) / dt
-        sliding[1:] |= flat[1:] & flat[:-1] & (moved > limits.slide)
+        points = np.concatenate([positions[:, [ankle]], sole], axis=1)
+        flat, step = _flat_moves(height(points), points, dt, limits)
+        sliding[1:] |= flat[1:] & flat[:-1] & (np.linalg.norm(step, axis=1) / dt > limits.slide)
+        points = points[:, :, [0, 2]]
         # standing in the air: the foot still, every point of it, for longer than a foot is held up
         # in the air by people (:attr:`Limits.held`) — but its sole above the ground
         still = np.linalg.norm(np.gradient(points, dt, axis=0), axis=2).max(axis=1) <= limits.still

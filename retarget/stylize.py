@@ -46,6 +46,7 @@ from doodle.core.quat import make_continuous
 from retarget.analysis import Stages, foot_contacts, guess_roles, partition
 from retarget.effort_signature import FASTEST, RATE, burst, most_moving, speed_profile
 from retarget.feet import two_bone_ik
+from retarget.qa import Limits, check, planted_moves
 from retarget.skeleton import Motion, forward_kinematics
 
 ALPHA_WEIGHT = 1.5
@@ -59,6 +60,7 @@ BURST_SHARE = 0.3  # the execution Time retimes: the effector's speed at least t
 SUSTAINED_CAP = 0.9  # Sustained: the effector outside the execution no faster than this share of its peak in it
 SPEED_MARGIN = 0.8  # retiming keeps every joint under this share of FASTEST between clip frames ...
 SPEED_BOUND = 0.95  # ... and the output's, measured after every edit (contact IK too), under this share
+PLANTED_SPEED = 0.8 * Limits().slide  # m/s: a flat foot played no faster than its neutral or than this
 WIDEN = 0.5  # Weight scales the acting hand or foot's path by 1 + this × L_w (Strong) or 1/(1 − this × L_w) (Light)
 
 
@@ -139,18 +141,24 @@ def smooth_edit(original: Motion, edited: Motion, bones: np.ndarray | None = Non
 
 
 def _restore_contacts(before: Motion, after: Motion, world=None, clip_frames: np.ndarray | None = None) -> Motion:
-    """``after`` with the feet that stood on the ground in ``before`` back where they stood
-    (:func:`~retarget.analysis.foot_contacts`): on each run of contact frames the foot's stillest point (ankle or
-    toe: a foot may pivot on its ball) is pinned at the run's median place on the floor —
-    the ankle placed about it as in ``before``, at the neutral's height, and the foot turned
-    as there, frame by frame — so a planted foot neither lifts nor slides, however the clip
-    is retimed; the pin eases in and out over :data:`PIN_FADE` seconds of ``after`` either
-    side. ``clip_frames``: the (fractional) frame of ``before`` each frame of ``after``
-    shows (default: the same frames); ``world``: ``forward_kinematics(after)`` if the
-    caller has it."""
+    """``after`` with the feet that stood on the floor in ``before`` back where they stood.
+
+    A foot is planted where it is in contact (:func:`~retarget.analysis.foot_contacts`) or flat
+    on the floor (``retarget.qa.planted_moves``: a foot turning on its ball, or creeping, is not
+    in contact by the first reading but still on the floor, and a pin let go there would drag
+    it). On each run of planted frames the ankle follows the neutral's ankle, as ``after``
+    plays the clip — at its height, the foot turned as there —, less the neutral's own slides:
+    where the neutral's stillest foot point moves faster than :data:`PLANTED_SPEED`, that
+    step is left out (the foot stays put, and keeps the offset to the end of the run). So a
+    planted foot neither lifts nor slides, however the clip is retimed (the retiming keeps a
+    creeping foot as slow: :func:`_planted_least`). The pin eases in and out over
+    :data:`PIN_FADE` seconds of ``after`` either side (longer where it pulls the foot farther,
+    at most :data:`PIN_SPEED`), while the foot is off the floor. ``clip_frames``: the
+    (fractional) frame of ``before`` each frame of ``after`` shows (default: the same frames);
+    ``world``: ``forward_kinematics(after)`` if the caller has it."""
     roles = guess_roles(before.skeleton)
     feet = [roles[k] for k in ("left_foot", "right_foot") if k in roles]
-    if not feet:
+    if not feet or before.frames < 2:
         return after
     old, old_rot = forward_kinematics(before)
     f = np.arange(after.frames, dtype=float) if clip_frames is None else np.asarray(clip_frames, dtype=float)
@@ -159,46 +167,45 @@ def _restore_contacts(before: Motion, after: Motion, world=None, clip_frames: np
     world = world or forward_kinematics(after)  # the legs are separate chains: one pass serves both
     frames = np.arange(after.frames)
     clip = np.arange(before.frames)
+    flat, step = planted_moves(before, (old, old_rot))
     for k, ankle in enumerate(feet):
         knee = int(before.skeleton.parents[ankle])
         hip = int(before.skeleton.parents[knee]) if knee >= 0 else -1
-        points = _foot_joints(before, ankle)
-        contact = foot_contacts(before, [ankle], world=old)[:, 0]
-        if hip < 0 or not contact.any():
+        planted = foot_contacts(before, [ankle], world=old)[:, 0].copy()
+        slid = np.zeros((before.frames - 1, 2))
+        if flat.shape[1] == len(feet):
+            planted |= flat[:, k]
+            fast = np.linalg.norm(step[:, k], axis=1) > PLANTED_SPEED * before.frame_time
+            slid = np.where((fast & planted[1:] & planted[:-1])[:, None], step[:, k], 0.0)
+        if hip < 0 or not planted.any():
             continue
-        at = np.stack([np.interp(f, clip, old[:, j, i]) for j in points for i in range(3)], axis=1)
-        at = at.reshape(after.frames, len(points), 3)  # the foot's joints in ``before``, as ``after`` plays it
+        ankle_at = np.stack([np.interp(f, clip, old[:, ankle, i]) for i in range(3)], axis=1)  # as ``after`` plays it
         weight, pull, target = np.zeros(after.frames), np.zeros(after.frames), np.zeros((after.frames, 3))
-        for a, b in _runs(contact[nearest]):
-            moved = np.linalg.norm(np.diff(at[a:b], axis=0), axis=2).sum(axis=0) if b - a > 1 else np.zeros(len(points))
-            pivot = int(np.argmin(moved))
-            spot = np.median(at[a:b, pivot], axis=0)
-            place = spot + at[:, 0] - at[:, pivot]  # the ankle about the pinned point
-            gap = np.linalg.norm(world[0][[a, b - 1], ankle] - place[[a, b - 1]], axis=1)  # how far the pin pulls
+        for a, b in _runs(planted):  # runs of clip frames
+            held = np.zeros((before.frames, 2))  # the neutral's slides in this run, left out
+            held[a + 1:b] = np.cumsum(slid[a:b - 1], axis=0)
+            held[b:] = held[b - 1]
+            place = ankle_at.copy()
+            place[:, [0, 2]] -= np.stack([np.interp(f, clip, held[:, i]) for i in range(2)], axis=1)
+            on = np.flatnonzero((nearest >= a) & (nearest < b))
+            if not len(on):
+                continue
+            s, e = on[0], on[-1] + 1  # the run's output frames
+            gap = np.linalg.norm(world[0][[s, e - 1], ankle] - place[[s, e - 1]], axis=1)  # how far the pin pulls
             fade = np.maximum(PIN_FADE, gap / PIN_SPEED) / after.frame_time
-            d = np.maximum(a - frames, frames - (b - 1))
-            f_ = np.where(d < 0, fade[0], np.where(frames < a, fade[0], fade[1]))
+            d = np.maximum(s - frames, frames - (e - 1))
+            f_ = np.where(frames < s, fade[0], fade[1])
             w = np.where(d <= 0, 1.0, np.where(d < f_, 0.5 + 0.5 * np.cos(np.pi * np.maximum(d, 0) / f_), 0.0))
-            weight = np.maximum(weight, w)  # between two stances the pin glides from one spot to the next
+            weight = np.maximum(weight, w)  # between two stances the pin glides from one place to the next
             pull += w
             target += w[:, None] * place
         target = target / np.maximum(pull, 1e-9)[:, None]
-        target[:, 1] = at[:, 0, 1]
+        target[:, 1] = ankle_at[:, 1]
         if weight.any():
             turned = world[1].copy()  # the foot as it stood in ``before``: its toes neither swing nor slide
             turned[:, ankle] = _slerp(world[1][:, ankle], _at(old_rot[:, ankle], f), weight)
             after = two_bone_ik(after, hip, knee, ankle, target, weight, world=(world[0], turned))
     return after
-
-
-def _foot_joints(motion: Motion, ankle: int) -> list[int]:
-    """The ankle and the joints under it (toes), ankle first."""
-    out, stack = [ankle], list(motion.skeleton.children(ankle))
-    while stack:
-        j = stack.pop()
-        out.append(j)
-        stack.extend(motion.skeleton.children(j))
-    return out
 
 
 def _at(q: np.ndarray, f: np.ndarray) -> np.ndarray:
@@ -232,6 +239,16 @@ def retime(motion: Motion, clip_to_out, oversample: int = 1) -> Motion:
     interpolation would play a slowed clip as straight pieces with a velocity kink at every
     original frame, which is a train of jerk spikes."""
     return _retimed(motion, clip_to_out, oversample)[0]
+
+
+def sliding_share(motion: Motion, frame_time: float | None = None) -> float:
+    """The share of time a flat foot slides (``retarget.qa.check``), measured on the motion
+    resampled (as :func:`retime` does) at ``frame_time`` — a stylised clip's — when given: at
+    120 fps a landing the 30 fps clip shows in one frame is seen touching down, so a neutral
+    clip and its styles are compared at the same rate."""
+    if frame_time is not None and frame_time < motion.frame_time * 0.99:
+        motion = retime(motion, lambda t: t, oversample=int(round(motion.frame_time / frame_time)))
+    return len(check(motion).sliding) / max(motion.frames, 1)
 
 
 def _retimed(motion: Motion, clip_to_out, oversample: int = 1) -> tuple[Motion, np.ndarray]:
@@ -339,13 +356,15 @@ def _execution(motion: Motion, stages: Stages, world: np.ndarray | None = None) 
     return (stages.preparation if fits else max(0, start - span)), start, min(end, motion.frames)
 
 
-def _time_poses(motion: Motion, spans: tuple[int, int, int], lt: float) -> Motion:
+def _time_poses(motion: Motion, spans: tuple[int, int, int], lt: float, effector: int) -> Motion:
     """Time's motion scale: the anticipation scaled down fully by 1/(3|L_t| + 1), the change
-    fading out over the execution (so the execution still reaches its neutral pose)."""
+    fading out over the execution (so the execution still reaches its neutral pose) — the
+    legs only when a foot acts (``effector``, a kick): a supporting leg's step scaled down
+    drags its foot over the floor instead of lifting it."""
     ant, start, end = spans
     c = 1.0 / (3 * abs(lt) + 1.0)
     return motion_scale(motion, ant, max(start, ant + 1), c, "full", keep_contacts=False, smooth=False,
-                        fade_end=end)
+                        fade_end=end, bones=_acting(motion, "full", effector))
 
 
 def _time_rates(motion: Motion, spans: tuple[int, int, int], lt: float, speed: np.ndarray) -> np.ndarray:
@@ -391,9 +410,8 @@ def _weight_poses(motion: Motion, spans: tuple[int, int, int], lw: float, effect
     swing scaled would land the foot elsewhere), the acting hand or foot's path widened or
     narrowed (:func:`_widen`) and the Vertical-shape shift over the execution."""
     c = 1.0 + lw if lw > 0 else 1.0 / (1.0 - lw)
-    keep = _leg_bones(motion) if effector not in _leg_bones(motion) else set()
-    bones = np.array([b for b in _bones(motion, "partial") if b not in keep], dtype=int)
-    m = motion_scale(motion, 0, motion.frames, c, "partial", keep_contacts=False, smooth=False, bones=bones)
+    m = motion_scale(motion, 0, motion.frames, c, "partial", keep_contacts=False, smooth=False,
+                     bones=_acting(motion, "partial", effector))
     k = 1.0 + WIDEN * lw if lw > 0 else 1.0 / (1.0 - WIDEN * lw)
     m = _widen(m, effector, k)
     return reshape(m, spans[1], spans[2], 0.1 * lw, "vertical")
@@ -417,6 +435,13 @@ def _widen(motion: Motion, effector: int, k: float) -> Motion:
     target = p[:, top] + centre + k * (rel - centre)
     target[:, 1] = np.maximum(target[:, 1], min(p[:, effector, 1].min(), target[:, 1].max()))  # a foot no lower than it went
     return two_bone_ik(motion, top, mid, effector, target, np.ones(motion.frames), world=world)
+
+
+def _acting(motion: Motion, mode: str, effector: int) -> np.ndarray:
+    """The bones ``mode`` scales (:func:`_bones`), less the legs unless ``effector`` is on one."""
+    legs = _leg_bones(motion)
+    keep = legs if effector not in legs else set()
+    return np.array([b for b in _bones(motion, mode) if b not in keep], dtype=int)
 
 
 def _leg_bones(motion: Motion) -> set:
@@ -474,6 +499,18 @@ def _least(world: np.ndarray) -> np.ndarray:
     return np.linalg.norm(np.diff(world, axis=0), axis=2).max(axis=1) / (SPEED_MARGIN * FASTEST)
 
 
+def _planted_least(motion: Motion, world) -> np.ndarray:
+    """Per clip frame interval, the least time it may take so a foot flat on the floor in the
+    neutral clip (``retarget.qa.planted_moves``) at either end of it — shuffling, turning on
+    its ball, landing — moves no faster than in the neutral, or than :data:`PLANTED_SPEED`:
+    played faster, a foot creeping over the floor, or landing, slides."""
+    flat, step = planted_moves(motion, world)
+    if not flat.size:
+        return np.zeros(max(motion.frames - 1, 0))
+    least = np.minimum(motion.frame_time, np.linalg.norm(step, axis=2) / PLANTED_SPEED)
+    return np.where(flat[1:] | flat[:-1], least, 0.0).max(axis=1)
+
+
 def _too_fast(out: Motion, clip_t: np.ndarray, clip_frame_time: float, clip_frames: int) -> np.ndarray:
     """Per clip frame interval, how many times faster than ``SPEED_BOUND × FASTEST`` the
     fastest joint of the output ``out`` (its frames showing clip times ``clip_t``) moves
@@ -512,12 +549,13 @@ def stylize_staged(motion: Motion, stages: Stages, lt: float = 0.0, lw: float = 
     if (lt == 0.0 and lw == 0.0) or motion.frames < 2:
         return motion, stages
     t = np.arange(motion.frames) * motion.frame_time
-    neutral_world = forward_kinematics(motion)[0]
+    neutral = forward_kinematics(motion)
+    neutral_world = neutral[0]
     spans = _execution(motion, stages, neutral_world) if motion.frames >= 4 else (0, 0, motion.frames)
     m, times = motion, t
     if lt:
-        m = _time_poses(m, spans, lt)
         j = most_moving(motion, neutral_world)
+        m = _time_poses(m, spans, lt, j)
         tt, v = speed_profile(m, j)  # as the anticipation scaled down leaves it
         speed = np.interp(t[:-1] + 0.5 * motion.frame_time, tt, v)
         rate = _time_rates(motion, spans, lt, speed)
@@ -529,7 +567,7 @@ def stylize_staged(motion: Motion, stages: Stages, lt: float = 0.0, lw: float = 
     if lw:
         times = _weight_times(world[0], times, lw)
     times = _smooth_rate(times, motion.frame_time)
-    least = _least(world[0])
+    least = np.maximum(_least(world[0]), _planted_least(motion, neutral))
     for _ in range(5):  # the output measured as it plays — spline, contact IK and all — and slowed where too fast
         times = _bounded(times, least, keep_duration=not lt)
         out, clip_t = _retimed(m, lambda _: times, oversample=_oversample(m))
