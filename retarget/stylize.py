@@ -23,7 +23,8 @@ Modifiers (§5.4.3):
   formulas use t in seconds within each stage.
 * **Weight** ``L_w ∈ [−1, 1]`` (Strong > 0, Light < 0): the whole clip scaled partially
   by ``c = 1 + L_w`` (Strong) or ``1/(1 − L_w)`` (Light); then retimed so the clip plays at
-  a speed proportional to ``V_e^{α L_w}`` (α = 1.5, ``V_e`` the mean joint speed, made
+  a speed proportional to ``V_e^{α L_w}`` (α = 1.5 for Strong, as the thesis; 0.5 for
+  Light, where 1.5 would play the slowest frames fastest; ``V_e`` the mean joint speed, made
   relative to its mean and kept in [0.05, 1] for Light; the rate capped at 3× either way
   so no bone turns further between two frames than interpolation can follow) — amplifying
   speed variations for Strong, flattening them for Light — with the duration kept
@@ -50,6 +51,7 @@ from retarget.qa import Limits, check, planted_moves
 from retarget.skeleton import Motion, forward_kinematics
 
 ALPHA_WEIGHT = 1.5
+ALPHA_LIGHT = 0.5  # Light: speed as played ∝ V_e^(1 − 0.5|L_w|) — flattened, never inverted (α ≥ 1 would make the slowest frames the fastest)
 OVERSAMPLE = 4  # retimed output has 4× a 30 fps clip's frame rate: frames at most 1/120 s apart
 EDIT_SMOOTHING = 0.05  # s: pose edits are low-passed over this much clip time
 RATE_SMOOTHING = 0.04  # s: the playback rate's changes are smoothed over this much clip time
@@ -469,7 +471,8 @@ def _weight_times(world: np.ndarray, times: np.ndarray, lw: float) -> np.ndarray
         v = np.clip(v / max(v.max(), 1e-9), 0.05, 1.0)
     else:
         v = np.maximum(v, 0.05)
-    rate = np.clip(np.power(v[1:], ALPHA_WEIGHT * lw), 1 / MAX_SPEEDUP, MAX_SPEEDUP)  # clip s per output s
+    alpha = ALPHA_WEIGHT if lw > 0 else ALPHA_LIGHT
+    rate = np.clip(np.power(v[1:], alpha * lw), 1 / MAX_SPEEDUP, MAX_SPEEDUP)  # clip s per output s
     dt_out = dt / rate
     dt_out *= (times[-1] - times[0]) / max(dt_out.sum(), 1e-9)
     return times[0] + np.concatenate([[0.0], np.cumsum(dt_out)])
