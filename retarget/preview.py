@@ -74,8 +74,9 @@ def keyframes(results, path) -> Path:
 
 def compare_picture(neutral, styled, effectors: list[int], path, title: str = "", notes: list[str] | None = None) -> Path:
     """Fig. 5.13-style comparison: neutral and stylised end-effector paths (side view, z
-    forward, y up) and the first effector's speed over time; ``notes``: lines written on
-    the speed plot (the signature measures)."""
+    forward, y up) and the first effector's speed over time — as the signature measures read
+    it (``retarget.effort_signature.speed_profile``), its execution (speed at least half its
+    peak) shaded; ``notes``: lines written on the speed plot (the signature measures)."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -93,11 +94,13 @@ def compare_picture(neutral, styled, effectors: list[int], path, title: str = ""
         ax.set_ylabel("y (m)")
         ax.grid(alpha=0.3)
     axes[0].legend(fontsize=7)
-    for motion, style, label in ((neutral, "-", "neutral"), (styled, "--", "stylised")):
-        world = forward_kinematics(motion)[0]
-        j = effectors[0]
-        speed = np.linalg.norm(np.gradient(world[:, j], motion.frame_time, axis=0), axis=1)
-        axes[2].plot(np.arange(motion.frames) * motion.frame_time, speed, style, label=label)
+    from retarget.effort_signature import RATE, burst, speed_profile
+
+    for motion, style, colour, label in ((neutral, "-", "C0", "neutral"), (styled, "--", "C3", "stylised")):
+        tt, speed = speed_profile(motion, effectors[0])  # the curve the signature measures read
+        a, _, b = burst(speed)
+        axes[2].plot(tt, speed, style, color=colour, label=label)
+        axes[2].axvspan(a / RATE, b / RATE, color=colour, alpha=0.12, lw=0)  # the execution: speed ≥ half its peak
     axes[2].set_xlabel("time (s)")
     axes[2].set_ylabel(f"{neutral.skeleton.names[effectors[0]]} speed (m/s)")
     axes[2].legend(fontsize=7)
