@@ -14,7 +14,7 @@ A library is a folder holding ``library.toml``::
     in_place = true                  # does not travel
     jumping = false                  # leaves the ground
     note = "free text"               # optional
-    clips = ["clips/wave.bvh"]       # optional: BVH files, relative to the library folder
+    clips = ["clips/wave.bvh"]       # optional: BVH files, relative to the library folder and in it
     stages = [4, 9, 20, 26]          # optional: frames ending preparation, anticipation,
                                      #   execution and follow-through (else extracted)
     cycle_length = 1.3               # optional, cyclic clips: metres travelled per cycle
@@ -41,7 +41,10 @@ A library is a folder holding ``library.toml``::
     constraints = ["D(0, 1, Personal)", "V(0, 1, 0.5)"]  # optional (§6.3; their syntax is
                                                          #   checked where compiled: grammar.library)
 
-Errors name the file, the action and the field. A user library extends the built-in one
+Errors name the file, the action and the field. Paths (``clips``, ``shape``, ``pair``)
+must lead to files inside the library's folder (:func:`doodle.core.files.within`): no
+absolute paths, no ``..`` out of it, no NUL — a library someone sends cannot make the
+program read elsewhere. A user library extends the built-in one
 and overrides its actions of the same name (:func:`combine`); an overriding action without
 an expression keeps the one it overrides. The expression's syntax is checked where it is
 compiled (:mod:`grammar.library`), and joint names where clips are loaded
@@ -56,6 +59,7 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 from doodle.core.errors import DoodleError
+from doodle.core.files import within
 
 BUILTIN = Path(__file__).resolve().parent / "builtin"
 RESERVED = {"unknown"}
@@ -206,7 +210,7 @@ def _interaction(entry, i: int, path: Path, names: set) -> Interaction:
                           "two-character clip")
     return Interaction(entry["name"], tuple(acts), tuple(constraints), tuple(contact),
                        tuple(float(v) for v in placement) if placement is not None else None,
-                       tuple(str((path.parent / c).resolve()) for c in pair))
+                       tuple(str(within(path.parent, c, f"{where}: field 'pair'")) for c in pair))
 
 
 def _action(entry, i: int, path: Path) -> ActionDef:
@@ -228,7 +232,7 @@ def _action(entry, i: int, path: Path) -> ActionDef:
     clips = entry.get("clips", [])
     if not isinstance(clips, list) or not all(isinstance(c, str) and c for c in clips):
         raise DoodleError(f"{where}: field 'clips' must be a list of BVH file paths")
-    resolved = tuple(str((path.parent / c).resolve()) for c in clips)
+    resolved = tuple(str(within(path.parent, c, f"{where}: field 'clips'")) for c in clips)
     stages = entry.get("stages")
     if stages is not None and (not isinstance(stages, list) or len(stages) != 4
                                or not all(isinstance(s, int) and not isinstance(s, bool) and s >= 0 for s in stages)
@@ -267,7 +271,8 @@ def _action(entry, i: int, path: Path) -> ActionDef:
                      cycle_length=float(cycle) if cycle is not None else None,
                      tolerance=float(tolerance) if tolerance is not None else None,
                      interaction_only=interaction_only,
-                     shape=str((path.parent / shape).resolve()) if shape is not None else None, track=track,
+                     shape=str(within(path.parent, shape, f"{where}: field 'shape'")) if shape is not None else None,
+                     track=track,
                      **behaviour, **flags)
 
 
@@ -306,7 +311,16 @@ def combine(base: Library | None, user: Library | None) -> Library:
 
 
 def _toml_string(text: str) -> str:
-    return '"' + text.replace("\\", "\\\\").replace('"', '\\"').replace("\n", "\\n") + '"'
+    """A TOML basic string: quotes, backslashes and every control character escaped (a raw
+    one, a NUL say, would make the file unreadable)."""
+    def escaped(c: str) -> str:
+        if c in '"\\':
+            return "\\" + c
+        if ord(c) < 0x20 or ord(c) == 0x7F:
+            return {"\n": "\\n", "\t": "\\t"}.get(c, f"\\u{ord(c):04x}")
+        return c
+
+    return '"' + "".join(escaped(c) for c in text) + '"'
 
 
 def format_library(library: Library, folder) -> str:

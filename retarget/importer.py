@@ -1,9 +1,11 @@
 """Build a library from a folder of BVH clips (Mixamo, CMU, Bandai Namco, DeepMimic…).
 
-Each file becomes a clip of an action. The action is named by the first rule of a mapping
-file that matches the file name, else from the file name itself (Bandai's
-``dataset-1_{content}_{style}_{id}`` gives ``content``; otherwise the stem without a trailing
-take number). A name that is a built-in action, or a known alias of one (``walk-left`` →
+Each file becomes a clip of an action, copied into the library's ``clips`` folder (a library
+names files inside its own folder only, so it can be moved or sent, and one that is sent
+cannot make the program read elsewhere: :func:`doodle.core.files.within`). The action is
+named by the first rule of a mapping file that matches the file name, else from the file
+name itself (Bandai's ``dataset-1_{content}_{style}_{id}`` gives ``content``; otherwise the
+stem without a trailing take number). A name that is a built-in action, or a known alias of one (``walk-left`` →
 Side Walk Left), takes that action's expression and flags, so the imported clips are
 recognised at once; other actions are clip-only until the mapping file or the learning
 wizard gives them an expression. An alias of a travelling action (Walk, Walk Back, Side Walk
@@ -26,6 +28,7 @@ from __future__ import annotations
 
 import fnmatch
 import re
+import shutil
 import tomllib
 from dataclasses import replace
 from pathlib import Path
@@ -33,8 +36,9 @@ from pathlib import Path
 import numpy as np
 
 from doodle.core.errors import DoodleError
-from doodle.core.files import atomic_write
-from library.manifest import FLAGS, ActionDef, Library, builtin, format_library, manifest_path
+from doodle.core.files import atomic_write, safe_file_name
+from library.folder import check_library_folder, updating
+from library.manifest import FLAGS, ActionDef, Library, builtin, format_library, load_library, manifest_path
 from retarget.clips import FIT, travel_directions
 
 ALIASES = {
@@ -82,12 +86,15 @@ def _travel(path: Path) -> float | None:
     return travel_yaw(face_front(read_bvh(path)))
 
 
-def import_library(folder, name: str, output, mapping=None, include: str = "*.bvh") -> Library:
-    """Write a library for the BVH files of ``folder`` into ``output``; returns it."""
-    folder, output = Path(folder), Path(output)
+def plan_library(folder, name: str, mapping=None, include: str = "*.bvh", source: str = "") -> Library:
+    """The library the BVH files of ``folder`` make, its clips still where they are (nothing
+    written): loaded and checked from there, errors name the files as the user knows them.
+    ``source`` is the manifest it will be written to, for messages."""
+    folder = Path(folder)
     if not folder.is_dir():
         raise DoodleError(f"{folder}: not a folder of BVH files")
-    files = sorted(p for p in folder.iterdir() if p.suffix.lower() == ".bvh" and fnmatch.fnmatch(p.name, include))
+    files = sorted(p for p in folder.iterdir() if p.suffix.lower() == ".bvh" and fnmatch.fnmatch(p.name, include)
+                   and p.is_file())
     if not files:
         raise DoodleError(f"{folder}: no BVH files matching {include!r}")
     rules = read_map(mapping) if mapping else []
@@ -117,9 +124,43 @@ def import_library(folder, name: str, output, mapping=None, include: str = "*.bv
         if rule:
             expression = rule.get("expression", expression)
             flags.update({f: rule[f] for f in FLAGS if f in rule})
-        actions[action_name] = ActionDef(action_name, expression, source=str(manifest_path(output)),
+        actions[action_name] = ActionDef(action_name, expression, source=str(source),
                                          clips=(str(path.resolve()),), note=notes.get(action_name, ""), **flags)
-    library = Library(name, tuple(actions.values()), str(manifest_path(output)))
-    output.mkdir(parents=True, exist_ok=True)
-    atomic_write(manifest_path(output), [format_library(library, output.resolve())])
-    return library
+    return Library(name, tuple(actions.values()), str(source))
+
+
+IMPORTED = ("library.toml", "clips")  # what an import writes anew in a library folder (the rest is kept)
+
+
+def write_library(library: Library, output) -> Library:
+    """Copy ``library``'s clips into ``output/clips`` and write its manifest there: a library
+    is self-contained (it names files inside its folder only, so it can be moved or sent);
+    returns it as written. ``output`` is a fresh folder (a staging one: :func:`import_library`)."""
+    output = Path(output)
+    (output / "clips").mkdir(parents=True, exist_ok=True)
+    taken: set[str] = set()
+    copied = {}
+    for action in library.actions:
+        for clip in action.clips:
+            name = safe_file_name(Path(clip).stem, taken) + ".bvh"
+            taken.add(name[:-4])
+            try:
+                shutil.copyfile(clip, output / "clips" / name)
+            except OSError as e:
+                raise DoodleError(f"{clip}: cannot copy into {output / 'clips'}: {e.strerror or e}") from None
+            copied[clip] = str((output / "clips" / name).resolve())
+    written = replace(library, actions=tuple(replace(a, clips=tuple(copied[c] for c in a.clips))
+                                             for a in library.actions))
+    atomic_write(manifest_path(output), [format_library(written, output.resolve())])
+    return written
+
+
+def import_library(folder, name: str, output, mapping=None, include: str = "*.bvh") -> Library:
+    """Write a library for the BVH files of ``folder`` into ``output`` (replacing the
+    manifest and clips of a library there only once the new ones are complete); returns it."""
+    output = Path(output)
+    check_library_folder(output)
+    library = plan_library(folder, name, mapping, include, str(manifest_path(output)))
+    with updating(output, IMPORTED) as stage:
+        write_library(library, stage)
+    return load_library(output)

@@ -693,6 +693,23 @@ def read_edits(path) -> dict:
     return out
 
 
+
+def check_edits(path, qualities: dict, segments: dict) -> None:
+    """An edit naming a track the doodle has not, or a segment its track has not, is a
+    mistake (a typo, a file meant for another doodle), never silently ignored: DoodleError
+    naming the edit file, the entry and what there is. ``segments`` maps each track to its
+    number of segments (None: not known yet, only the tracks are checked)."""
+    for track, index in qualities:
+        if track is None:
+            continue
+        entry = f"{path}: segments entry for track {track!r}" + (f", index {index}" if index is not None else "")
+        if track not in segments:
+            raise DoodleError(f"{entry}: no such track (tracks: {', '.join(segments)})")
+        count = segments[track]
+        if index is not None and count is not None and index >= count:
+            have = f"segments 0–{count - 1}" if count > 1 else ("segment 0" if count else "no segments")
+            raise DoodleError(f"{entry}: track {track} has {have} (see report.json's 'index')")
+
 def _transition_points(pieces: list, clips: list) -> list:
     """Clip ranges between transition points (§5.3.1) for neighbouring one-shot clips."""
     from retarget.transitions import transition_point

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import json
-from pathlib import Path
 
 from doodle.core.errors import DoodleError
 from doodle.app.cli.options import input_options, library_options, load_input, progress_bar, segmenter_options, segmenter_params
@@ -12,7 +11,9 @@ from doodle.app.cli.options import input_options, library_options, load_input, p
 def add_parser(sub) -> None:
     p = sub.add_parser("compile", help="compile a doodle into BVH animation (one file per track) and report.json")
     p.add_argument("file", metavar="FILE")
-    p.add_argument("-o", "--output", required=True, metavar="OUTDIR")
+    p.add_argument("-o", "--output", required=True, metavar="OUTDIR",
+                   help="folder of the output (made if missing): TRACK.bvh, report.json and the previews are "
+                        "replaced, together, when the compile succeeds; other files in it are left alone")
     input_options(p)
     library_options(p)
     p.add_argument("--fps", type=float, default=30.0, help="output frame rate (default 30)")
@@ -40,20 +41,23 @@ def add_parser(sub) -> None:
 
 
 def cmd_compile(args) -> int:
-    from doodle.core.files import atomic_write
-    from doodle.app.pipeline import compile_doodle, quality
+    from doodle.core.files import atomic_files, atomic_write, check_dir
+    from doodle.app.pipeline import check_edits, compile_doodle, quality
     from doodle.app.report import compiled as compiled_report
     from retarget.bvh import write_bvh
     from retarget.qa import check_scene
 
     from retarget.terrain import parse_terrain
 
+    out = check_dir(args.output)
     params, mounts = segmenter_params(args)
     terrain = parse_terrain(args.terrain) if args.terrain else None
     doodle = load_input(args.file, args, mounts)
     from doodle.app.pipeline import read_edits
 
     qualities = read_edits(args.edits) if args.edits else {}
+    if args.edits:
+        check_edits(args.edits, qualities, {name: None for name in doodle.names})
     for name, value in (("--time", args.time), ("--weight", args.weight)):
         if not -1.0 <= value <= 1.0:
             raise DoodleError(f"{name} must be between -1 and 1, not {value:g}")
@@ -72,26 +76,28 @@ def cmd_compile(args) -> int:
     results = compile_doodle(doodle, args.library, not args.no_builtin, params, args.fps, args.scale, args.threshold,
                              not args.no_foot_pinning, terrain, args.jump_arc, args.retime, qualities, args.style,
                              effort_model, progress_bar("segments"))
-    out = Path(args.output)
-    out.mkdir(parents=True, exist_ok=True)
+    if args.edits:
+        check_edits(args.edits, qualities, {r.track: len(r.segments) for r in results})
     paths = {r.track: out / f"{r.track}.bvh" for r in results}
-    for r in results:
-        write_bvh(paths[r.track], r.motion)
     checks = check_scene({r.track: r.motion for r in results}, terrain, contacts=results[0].contacts,
                          soles={r.track: r.sole for r in results})
     report = compiled_report(args.file, args.fps, args.terrain, results, paths, {r.track: quality(r) for r in results},
                              checks)
-    if args.preview:
-        from retarget.preview import keyframes, plan_view
+    with atomic_files() as staged:  # every file of the output replaced at the end, or none
+        for r in results:
+            write_bvh(staged(paths[r.track]), r.motion)
+        if args.preview:
+            from retarget.preview import keyframes, plan_view
 
-        from doodle.app.cli.render import preview_sheet
+            from doodle.app.cli.render import can_preview, preview_sheet
 
-        report["preview"] = [str(plan_view(results, {r.track: r.projected for r in results}, out / "plan.png")),
-                             str(keyframes(results, out / "keyframes.png"))]
-        sheet = preview_sheet(results, terrain, out / "render.png", args.fps)
-        if sheet is not None:
-            report["preview"].append(str(sheet))
-    atomic_write(out / "report.json", [json.dumps(report, indent=2) + "\n"])
+            plan_view(results, {r.track: r.projected for r in results}, staged(out / "plan.png"))
+            keyframes(results, staged(out / "keyframes.png"))
+            report["preview"] = [str(out / "plan.png"), str(out / "keyframes.png")]
+            if can_preview():
+                preview_sheet(results, terrain, staged(out / "render.png"), args.fps)
+                report["preview"].append(str(out / "render.png"))
+        atomic_write(staged(out / "report.json"), [json.dumps(report, indent=2) + "\n"])
     for name, tr in report["tracks"].items():
         m = tr["metrics"]
         print(f"{tr['bvh']}: {tr['frames']} frames at {args.fps:g} fps; "

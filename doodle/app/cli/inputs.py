@@ -4,9 +4,9 @@ converted, a prop and the Segmenter calibrated."""
 from __future__ import annotations
 
 import json
-from pathlib import Path
 
 from doodle.core.errors import DoodleError
+from doodle.core.files import output_file
 from doodle.app.cli.options import each_file, input_options, load_input, segmenter_options, segmenter_params
 from doodle.app.report import seconds_of
 
@@ -25,6 +25,7 @@ def add_parser(sub) -> None:
     p = sub.add_parser("import", help="convert a CSV recording into a doodle file")
     p.add_argument("file", metavar="CSV")
     p.add_argument("-o", "--output", required=True, metavar="FILE.doodle")
+    p.add_argument("--overwrite", action="store_true", help="replace FILE.doodle if it exists")
     input_options(p)
     p.set_defaults(run=cmd_import)
 
@@ -35,6 +36,7 @@ def add_parser(sub) -> None:
 
     p = sub.add_parser("calibrate", help="measure a prop's forward and the Segmenter's thresholds")
     p.add_argument("-o", "--output", required=True, metavar="FILE.toml")
+    p.add_argument("--overwrite", action="store_true", help="replace FILE.toml if it exists")
     p.add_argument("--forward", metavar="FILE", help="hold the prop still facing forward, then push it forward")
     p.add_argument("--translation", metavar="FILE", help="a minimal translation-only gesture")
     p.add_argument("--rotation", metavar="FILE", help="a minimal rotation-only gesture")
@@ -71,9 +73,9 @@ def cmd_tokens(args) -> int:
 def cmd_import(args) -> int:
     from doodle.input.fileformat import write_doodle
 
+    out = output_file(args.output, args.overwrite)
     doodle = load_input(args.file, args, None, raw=True)
-    Path(args.output).parent.mkdir(parents=True, exist_ok=True)
-    write_doodle(args.output, doodle, convention="doodle")
+    write_doodle(out, doodle, convention="doodle")
     print(f"{args.output}: {len(doodle.tracks)} track(s), {len(doodle.t)} samples, {doodle.t[-1]:.2f} s")
     return 0
 
@@ -95,6 +97,7 @@ def cmd_calibrate(args) -> int:
     from doodle.input.devices import calibrate_mount
     from doodle.input.settings import write_calibration
 
+    output_file(args.output, args.overwrite)
     params, mounts = segmenter_params(args)
     if args.forward:
         doodle = load_input(args.forward, args, None, raw=True)

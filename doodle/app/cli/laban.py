@@ -12,6 +12,7 @@ import sys
 from pathlib import Path
 
 from doodle.core.errors import DoodleError
+from doodle.core.files import output_dir, output_file
 
 DEFAULT_EVAL_DIR = "out/laban-eval"
 
@@ -24,6 +25,7 @@ def add_parser(sub) -> None:
     q.add_argument("files", nargs="*", help="labelled doodle files (header x-drive) or folders of them")
     q.add_argument("--synthetic", action="store_true", help="add the generated curves the default model uses")
     q.add_argument("-o", "--output", required=True, metavar="MODEL.npz")
+    q.add_argument("--overwrite", action="store_true", help="replace MODEL.npz if it exists")
     q.add_argument("--augment", type=int, default=16, help="sub-sampled copies per training curve (default 16)")
     q.add_argument("--track", default="c0", help="track of each file holding the gesture (default c0)")
     q.add_argument("--sets", default="euclidean,affine,moving",
@@ -33,7 +35,8 @@ def add_parser(sub) -> None:
     q = lsub.add_parser("eval", help="accuracy per factor, State and Drive; confusion matrices as PNG")
     q.add_argument("files", nargs="*", help="labelled doodle files or folders (default: generated held-out performers)")
     q.add_argument("--model", metavar="MODEL.npz", help="model to evaluate (default: the shipped one)")
-    q.add_argument("-o", "--output", default=DEFAULT_EVAL_DIR, metavar="DIR", help=f"(default {DEFAULT_EVAL_DIR})")
+    q.add_argument("-o", "--output", default=DEFAULT_EVAL_DIR, metavar="DIR",
+                   help=f"folder for report.json and the confusion PNGs, replaced together (default {DEFAULT_EVAL_DIR})")
     q.add_argument("--track", default="c0")
     q.add_argument("--people", type=int, default=3, help="generated held-out performers (default 3)")
     q.add_argument("--json", action="store_true", help="print the report as JSON")
@@ -54,7 +57,8 @@ def add_parser(sub) -> None:
 
     q = lsub.add_parser("record", help="record labelled examples with the controllers (needs SteamVR)")
     q.add_argument("--drive", required=True)
-    q.add_argument("-o", "--output", required=True)
+    q.add_argument("-o", "--output", required=True, metavar="FILE.doodle")
+    q.add_argument("--overwrite", action="store_true", help="replace FILE.doodle if it exists")
     q.set_defaults(run=cmd_record)
 
 
@@ -109,6 +113,7 @@ def cmd_train(args) -> int:
     sets = tuple(s.strip() for s in args.sets.split(",") if s.strip())
     if not sets or any(s not in FEATURE_SETS for s in sets):
         raise DoodleError(f"--sets: choose among {', '.join(FEATURE_SETS)}, not {args.sets!r}")
+    output_file(args.output, args.overwrite)
     curves = labelled(args.files, args.track) if args.files else []
     held = []
     if args.synthetic:
@@ -128,29 +133,28 @@ def cmd_train(args) -> int:
 
 
 def cmd_eval(args) -> int:
+    from doodle.core.files import atomic_files, atomic_write, check_dir
     from laban.models import load as load_model
     from laban.efforts import DRIVES, STATES
     from laban.report import confusion_png
     from laban.train import evaluate, generated
 
+    out = check_dir(args.output)
     model = load_model(args.model)
     if args.people < 1:
         raise DoodleError(f"--people must be 1 or more, not {args.people}")
     curves = labelled(args.files, args.track) if args.files else generated("test", people=args.people)
     report = evaluate(model, curves)
     report["data"] = [str(f) for f in args.files] or "generated held-out performers (laban.train.DEFAULT_DATA['test'])"
-    out = Path(args.output)
-    out.mkdir(parents=True, exist_ok=True)
     pictures = []
-    for method, r in report["methods"].items():
-        pictures.append(str(confusion_png(r["drive_confusion"], list(DRIVES), out / f"{method}_drives.png",
-                                          f"{method}: Drives")))
-        pictures.append(str(confusion_png(r["state_confusion"], list(STATES), out / f"{method}_states.png",
-                                          f"{method}: States (Time + Weight)")))
-    report["pictures"] = pictures
-    from doodle.core.files import atomic_write
-
-    atomic_write(out / "report.json", [json.dumps(report, indent=2) + "\n"])
+    with atomic_files() as staged:  # the pictures and report.json together, or none
+        for method, r in report["methods"].items():
+            for kind, matrix, labels, title in (("drives", "drive_confusion", DRIVES, "Drives"),
+                                                ("states", "state_confusion", STATES, "States (Time + Weight)")):
+                pictures.append(str(out / f"{method}_{kind}.png"))
+                confusion_png(r[matrix], list(labels), staged(pictures[-1]), f"{method}: {title}")
+        report["pictures"] = pictures
+        atomic_write(staged(out / "report.json"), [json.dumps(report, indent=2) + "\n"])
     if args.json:
         print(json.dumps(report))
         return 0
@@ -233,14 +237,16 @@ def cmd_record(args) -> int:
     from doodle.input.sources import OpenVRSource
 
     drive = _drive_name(args.drive, "--drive")
+    out = output_file(args.output, args.overwrite)
     try:
         source = OpenVRSource()
     except DoodleError as e:
         raise DoodleError(f"{e}; or record elsewhere and label the file with `doodle laban label FILE "
                           f"--drive {drive}`") from None
     try:
+        output_dir(out.parent if str(out.parent) else ".")
         print(f"press the trigger, perform a {drive}, press the trigger again", flush=True)
-        result = record(source, args.output, wait_for_trigger=True)
+        result = record(source, args.output, wait_for_trigger=True, overwrite=args.overwrite)
     finally:
         source.close()
     doodle = load(result.path)

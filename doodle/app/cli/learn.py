@@ -5,10 +5,16 @@ expression; with two tracks (``--tracks c0,c1``) one expression is learned per t
 as actions ``NAME.c0`` and ``NAME.c1`` joined by an ``[[interactions]]`` entry ``NAME`` — an
 expression pair performed together. The overlap check against the library then says which
 actions would collide and on which token string, so the person can keep, rename or re-record.
+
+The library changes whole or not at all (:mod:`library.folder`): its new version — shapes,
+manifest — is written beside it and swapped in once it is complete and compiles, so a failed
+or killed run leaves it as it was. An action's name is not a path: its shape file gets a safe
+name of its own (``shapes/NAME.npz`` for ordinary names).
 """
 
 from __future__ import annotations
 
+import itertools
 import time
 from pathlib import Path
 
@@ -21,7 +27,8 @@ def add_parser(sub) -> None:
     p = sub.add_parser("learn", help="learn a new action from three (or more) performed examples")
     p.add_argument("name", help="the new action's name")
     p.add_argument("examples", nargs="*", help="doodle or CSV files, one performance each")
-    p.add_argument("--library", required=True, metavar="DIR", help="user library to add it to (created if missing)")
+    p.add_argument("--library", required=True, metavar="DIR", help="user library to add it to (created if missing; "
+                   "changed only when learning succeeds)")
     p.add_argument("--replace", action="store_true", help="replace an action of that name in DIR")
     p.add_argument("--no-builtin", action="store_true", help="check overlaps against DIR only")
     p.add_argument("--record", action="store_true", help="perform the examples with the controllers (needs SteamVR)")
@@ -43,9 +50,11 @@ def open_source():
 
 def record_takes(name: str, folder: Path, takes: int = TAKES, sleep=time.sleep) -> list[str]:
     """The wizard: ``takes`` performances recorded with the controllers, each started and
-    stopped with the trigger after a countdown, shown live; saved in ``folder/takes/``."""
+    stopped with the trigger after a countdown, shown live; saved in ``folder/takes/`` under
+    names no earlier take has (a take is a performance: never overwritten)."""
     from doodle.app.cli.record import _View
     from doodle.app.recorder import record
+    from doodle.core.files import output_dir, safe_file_name
 
     try:
         source = open_source()
@@ -54,16 +63,17 @@ def record_takes(name: str, folder: Path, takes: int = TAKES, sleep=time.sleep) 
                           "--library DIR") from None
     paths = []
     try:
-        (folder / "takes").mkdir(parents=True, exist_ok=True)
-        safe = "".join(c if c.isalnum() or c in "-_" else "_" for c in name)
+        where = output_dir(folder / "takes")
+        stem = safe_file_name(name)
+        free = (p for p in (where / f"{stem}_{k}.doodle" for k in itertools.count(1)) if not p.exists())
         for k in range(1, takes + 1):
-            path = folder / "takes" / f"{safe}_{k}.doodle"
+            path = next(free)
             print(f"take {k}/{takes} of {name!r}: ", end="", flush=True)
             for n in range(COUNTDOWN, 0, -1):
                 print(f"{n}… ", end="", flush=True)
                 sleep(1.0)
             print("press the trigger, perform the gesture, press the trigger again", flush=True)
-            result = record(source, path, wait_for_trigger=True, on_event=_View(), overwrite=True)
+            result = record(source, path, wait_for_trigger=True, on_event=_View())
             print(f"  take {k}: {result.duration:.2f} s, {result.samples} samples → {path}", flush=True)
             paths.append(str(path))
     finally:
@@ -71,22 +81,52 @@ def record_takes(name: str, folder: Path, takes: int = TAKES, sleep=time.sleep) 
     return paths
 
 
+NAME_LIMIT = 100  # characters in an action name
+
+
+def check_name(text: str) -> str:
+    """The action name as given (spaces around it dropped), refused where it could not be
+    written into a manifest or shown on one line. It is not a path: its shape file is named
+    by :func:`doodle.core.files.safe_file_name`."""
+    import unicodedata
+
+    name = text.strip()
+    shown = repr(name if len(name) <= 40 else name[:37] + "...")
+    if not name or any(c in name for c in "\"[]"):
+        raise DoodleError(f"action name {shown}: not usable (empty, or holds a quote or brackets)")
+    if any(unicodedata.category(c) == "Cc" for c in name):
+        raise DoodleError(f"action name {shown}: holds control characters (such as NUL or a line break)")
+    if len(name) > NAME_LIMIT:
+        raise DoodleError(f"action name {shown}: too long ({len(name)} characters; at most {NAME_LIMIT})")
+    return name
+
+
 def cmd_learn(args) -> int:
     from doodle.app.cli.options import load_input, segmenter_params
-    from doodle.core.files import atomic_write
+    from doodle.core.files import atomic_write, safe_file_name
     from grammar.learn import learn
     from grammar.library import compile_library, overlaps
     from grammar.shapes import save_paths
+    from library.folder import check_library_folder, updating
     from library.manifest import ActionDef, Interaction, Library, builtin, combine, format_library, load_library, \
         manifest_path
 
+    name = check_name(args.name)
+    folder = check_library_folder(Path(args.library))
+    existing = load_library(folder) if manifest_path(folder).exists() else Library(folder.resolve().name, (),
+                                                                                   str(manifest_path(folder)))
+
+    def clashing(names):
+        clash = [n for n in names if n in existing.names or n in {i.name for i in existing.interactions}]
+        if clash and not args.replace:
+            raise DoodleError(f"{manifest_path(folder)}: {clash[0]!r} exists already; choose another name or "
+                              "--replace it")
+
+    clashing([name])  # before any recording
     if args.record:
-        args.examples = record_takes(args.name, Path(args.library), TAKES)
+        args.examples = record_takes(name, folder, TAKES)
     if len(args.examples) < 2:
         raise DoodleError(f"give at least two example files (three are best), got {len(args.examples)}")
-    name = args.name.strip()
-    if not name or any(c in name for c in "\"\n[]"):
-        raise DoodleError(f"{args.name!r} is not a usable action name")
     params, mounts = segmenter_params(args)
     doodles = [load_input(path, args, mounts) for path in args.examples]
     tracks = doodles[0].names if args.tracks else doodles[0].names[:1]
@@ -94,14 +134,8 @@ def cmd_learn(args) -> int:
         missing = [t for t in tracks if t not in d.names]
         if missing:
             raise DoodleError(f"{path}: no track {missing[0]!r} (tracks: {', '.join(d.names)})")
-    folder = Path(args.library)
-    existing = load_library(folder) if manifest_path(folder).exists() else Library(folder.resolve().name, (),
-                                                                                   str(manifest_path(folder)))
     names = [name] if len(tracks) == 1 else [f"{name}.{t}" for t in tracks]
-    clash = [n for n in names + [name] if n in existing.names or n in {i.name for i in existing.interactions}]
-    if clash and not args.replace:
-        raise DoodleError(f"{manifest_path(folder)}: {clash[0]!r} exists already; choose another name or "
-                          "--replace it")
+    clashing(names + [name])
     start = time.perf_counter()
     learned = []
     for track in tracks:
@@ -112,22 +146,28 @@ def cmd_learn(args) -> int:
             raise DoodleError(f"track {track}: {e}") from None
     took = time.perf_counter() - start
     source = ", ".join(Path(p).name for p in args.examples)
-    shapes = [folder / "shapes" / f"{n}.npz" for n in names]
-    new = [ActionDef(n, lrn.expression, False, True, False, note=f"learned from {source}",
-                     source=str(manifest_path(folder)), tolerance=lrn.tolerance, shape=str(shape.resolve()),
-                     track=track if len(tracks) > 1 else None)
-           for n, lrn, shape, track in zip(names, learned, shapes, tracks)]
     kept = tuple(a for a in existing.actions if a.name not in names)
+    taken = {Path(a.shape).stem for a in kept if a.shape}
+    files = []
+    for n in names:
+        files.append(safe_file_name(n, taken) + ".npz")
+        taken.add(files[-1][:-4])
+    home = folder.resolve()
+    new = [ActionDef(n, lrn.expression, False, True, False, note=f"learned from {source}",
+                     source=str(manifest_path(folder)), tolerance=lrn.tolerance, shape=str(home / "shapes" / file),
+                     track=track if len(tracks) > 1 else None)
+           for n, lrn, file, track in zip(names, learned, files, tracks)]
     interactions = tuple(i for i in existing.interactions if i.name != name)
     if len(names) > 1:
         interactions += (Interaction(name, tuple(names)),)
     library = Library(existing.name, kept + tuple(new), existing.source, existing.roles, interactions,
                       existing.states)
-    (folder / "shapes").mkdir(parents=True, exist_ok=True)
-    for shape, lrn in zip(shapes, learned):  # first: compiling the library reads them
-        save_paths(shape, lrn.paths)
-    compiled = compile_library(combine(None if args.no_builtin else builtin(), library))
-    atomic_write(manifest_path(folder), [format_library(library, folder.resolve())])
+    with updating(folder) as stage:  # the library changes whole once all is written, or not at all
+        (stage / "shapes").mkdir(exist_ok=True)
+        for file, lrn in zip(files, learned):
+            save_paths(stage / "shapes" / file, lrn.paths)
+        atomic_write(manifest_path(stage), [format_library(library, home)])
+        compiled = compile_library(combine(None if args.no_builtin else builtin(), load_library(stage)))
     for n, lrn, track in zip(names, learned, tracks):
         print(f"{n} ({track}, learned in {took * 1000 / len(tracks):.0f} ms, tolerance {lrn.tolerance:g} edits): "
               f"{lrn.expression}")

@@ -5,6 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from doodle.core.errors import DoodleError
+from doodle.core.files import output_file
 from doodle.app.cli.options import library_of, library_options
 
 
@@ -21,7 +22,9 @@ def add_parser(sub) -> None:
     library_options(q)
     q.set_defaults(run=cmd_library)
     q = lsub.add_parser("sheet", help="contact sheet PNG: each action's clip at its stage ends")
-    q.add_argument("-o", "--output", default="out/library_sheet.png", metavar="PNG")
+    q.add_argument("-o", "--output", default="out/library_sheet.png", metavar="PNG",
+                   help="the picture to write (default out/library_sheet.png)")
+    q.add_argument("--overwrite", action="store_true", help="replace PNG if it exists")
     library_options(q)
     q.set_defaults(run=cmd_library)
     q = lsub.add_parser("import", help="build a library from a folder of BVH clips")
@@ -29,7 +32,9 @@ def add_parser(sub) -> None:
     q.add_argument("--name", required=True, help="the library's name")
     q.add_argument("--map", metavar="FILE", help="TOML rules naming actions from file names")
     q.add_argument("--include", default="*.bvh", metavar="GLOB", help="only files matching (default *.bvh)")
-    q.add_argument("-o", "--output", metavar="OUT", help="library folder to write (default: ./NAME)")
+    q.add_argument("-o", "--output", metavar="OUT", help="library folder to write (default: ./NAME): a new folder, "
+                   "or a library whose manifest and clips are replaced once the import succeeds (its other files "
+                   "are kept); the clips are copied into OUT/clips")
     q.set_defaults(run=cmd_library)
 
 
@@ -64,13 +69,23 @@ def cmd_library(args) -> int:
 
 
 def _library_import(args) -> int:
-    from library.manifest import load_library
+    """Every clip is read and analysed from where it is (errors name the file as the user
+    knows it) before anything is written; then the library is written into a staging folder
+    and swapped in whole: a failed or killed import leaves an existing library as it was."""
+    from doodle.core.files import safe_file_name
+    from library.folder import check_library_folder, updating
+    from library.manifest import load_library, manifest_path
     from retarget.clips import load_clips
-    from retarget.importer import import_library
+    from retarget.importer import IMPORTED, plan_library, write_library
 
-    output = Path(args.output or args.name)
-    lib = import_library(args.folder, args.name, output, args.map, args.include)
-    clips = load_clips(load_library(output))  # validates and analyses what was written
+    if args.output is None and (safe_file_name(args.name) != args.name or args.name in (".", "..")):
+        raise DoodleError(f"--name {args.name!r}: not usable as a folder name; give the folder with -o OUT")
+    output = check_library_folder(Path(args.output or args.name))
+    lib = plan_library(args.folder, args.name, args.map, args.include, str(manifest_path(output)))
+    clips = load_clips(lib)  # validates and analyses every clip
+    with updating(output, IMPORTED) as stage:
+        write_library(lib, stage)
+        load_library(stage)  # what was written reads back
     print(f"{output / 'library.toml'}: {len(lib.actions)} actions from {sum(len(a.clips) for a in lib.actions)} clips")
     for name, found in clips.items():
         c = found[0]
@@ -87,6 +102,7 @@ def _library_sheet(args) -> int:
     from retarget.preview import atomic_png
     from retarget.sheet import contact_sheet
 
+    out = output_file(args.output, args.overwrite)
     lib = library_of(args)
     clips = load_clips(lib)
     if not clips:
@@ -95,8 +111,6 @@ def _library_sheet(args) -> int:
     frames = {name: [0, *list(found[0].stages.bounds()[k][1] for k in ("preparation", "anticipation", "execution",
                                                                         "follow_through")), found[0].motion.frames - 1]
               for name, found in clips.items()}
-    out = Path(args.output)
-    out.parent.mkdir(parents=True, exist_ok=True)
     atomic_png(out, lambda name: contact_sheet(motions, name, frames=frames))
     print(f"{out}: {len(motions)} clips, key frames at the stage ends (side and front views)")
     return 0

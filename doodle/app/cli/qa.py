@@ -9,6 +9,7 @@ import json
 from pathlib import Path
 
 from doodle.core.errors import DoodleError
+from doodle.core.files import within
 
 EXIT_FAILS = 4  # the animation fails the check (bad input is 1)
 
@@ -35,8 +36,9 @@ def cmd_qa(args) -> int:
     if report_path.exists():
         try:
             report = json.loads(report_path.read_text(encoding="utf-8"))
-            paths = [Path(t["bvh"]) for t in report["tracks"].values()]
-            paths = [p if p.exists() else folder / p.name for p in paths]
+            # the BVH files beside it, as compile writes them: a report someone sends names no other file
+            paths = [within(folder, Path(t["bvh"]).name, f"{report_path}: track {name!r}")
+                     for name, t in report["tracks"].items()]
             spec = spec or (report.get("terrain") if report.get("terrain") != "flat" else None)
             interactions = report.get("interactions", [])
             soles = {Path(t["bvh"]).stem: float(t.get("sole_m", 0.0)) for t in report["tracks"].values()}

@@ -8,7 +8,6 @@ synthetic`` plays a built-in synthetic performance (the thesis's Fig. 4.7 scene,
 from __future__ import annotations
 
 import sys
-from pathlib import Path
 
 import numpy as np
 
@@ -89,14 +88,14 @@ class _View:
 def cmd_record(args) -> int:
     from grammar.recognizer import load_actions
     from doodle.app.recorder import record
+    from doodle.core.files import output_dir, output_file
 
-    out = Path(args.output)
-    if out.exists() and not args.overwrite:
-        raise DoodleError(f"{out}: already exists (pass --overwrite to replace it)")
+    out = output_file(args.output, args.overwrite)
     if args.seconds is not None and not (args.seconds > 0 and np.isfinite(args.seconds)):
         raise DoodleError(f"--seconds must be a positive number, not {args.seconds:g}")
     source = _open_source(args)
     try:
+        output_dir(out.parent if str(out.parent) else ".")
         compiled = load_actions(args.library, not args.no_builtin)
         tracks = ", ".join(f"{n} ({' '.join(x for x in (r, s) if x)})" if r or s else n for n, r, s in source.tracks)
         how = "press the trigger to start and again to stop" if args.trigger else "Ctrl-C to stop"

@@ -22,6 +22,7 @@ def add_parser(sub) -> None:
     p = sub.add_parser("render", help="render the compiled animation in 3D: key-frame sheet (.png), .gif or .mp4")
     p.add_argument("file", metavar="FILE")
     p.add_argument("-o", "--output", required=True, metavar="OUT.png|gif|mp4")
+    p.add_argument("--overwrite", action="store_true", help="replace OUT if it exists")
     p.add_argument("--library", metavar="DIR", help="a user library (folder with library.toml)")
     p.add_argument("--terrain", metavar="SPEC", help="flat[:H], jacksboro[:SIZE], s1045[:SIZE], "
                    "heightfield:FILE.npz[:SPACING] or mesh:FILE.obj|ply|glb (default flat)")
@@ -56,6 +57,7 @@ def _label(results, frame: int, fps: float) -> str:
 def cmd_render(args) -> int:
     from doodle.app import render
     from doodle.app.cli.options import progress_bar
+    from doodle.core.files import output_file
 
     out = Path(args.output)
     suffix = out.suffix.lower()
@@ -67,6 +69,7 @@ def cmd_render(args) -> int:
         raise DoodleError(f"--fps must be a positive number, not {args.fps:g}")
     if args.frames is not None and args.frames < 1:
         raise DoodleError(f"--frames must be 1 or more, not {args.frames}")
+    output_file(out, args.overwrite)
     render.load_pyrender()  # no pyrender or EGL: say so before compiling
 
     from doodle.input.loader import load
@@ -80,10 +83,6 @@ def cmd_render(args) -> int:
     count = args.frames if args.frames is not None else (SHEET_FRAMES if suffix == ".png" else None)
     picks = render.frame_indices(results, frames=count)
     frames = render.render_frames(results, terrain, size, frames=count, progress=progress_bar("rendering"))
-    try:
-        out.parent.mkdir(parents=True, exist_ok=True)
-    except OSError as e:
-        raise DoodleError(f"{out}: cannot create its folder: {e.strerror or e}") from None
     start = time.perf_counter()
     if suffix == ".png":
         labels = [_label(results, int(f), args.fps) for f in picks]
@@ -99,9 +98,9 @@ def cmd_render(args) -> int:
     return 0
 
 
-def preview_sheet(results, terrain, path, fps: float, size=(480, 360)) -> Path | None:
-    """The key-frame sheet `doodle compile --preview` puts beside the BVH; None (with a
-    warning) where pyrender or EGL is missing — the other previews still come."""
+def can_preview() -> bool:
+    """Whether `doodle compile --preview` can draw its 3D sheet: False, with a warning, where
+    pyrender or EGL is missing — the other previews still come."""
     import warnings
 
     from doodle.app import render
@@ -110,9 +109,15 @@ def preview_sheet(results, terrain, path, fps: float, size=(480, 360)) -> Path |
         render.load_pyrender()
     except DoodleError as e:
         warnings.warn(f"no 3D preview: {e}")
-        return None
+        return False
+    return True
+
+
+def preview_sheet(results, terrain, path, fps: float, size=(480, 360)) -> Path:
+    """The key-frame sheet `doodle compile --preview` puts beside the BVH (see :func:`can_preview`)."""
+    from doodle.app import render
+
     picks = render.frame_indices(results, frames=SHEET_FRAMES)
     frames = render.render_frames(results, terrain, size, frames=SHEET_FRAMES)
     render.write_sheet(frames, Path(path), columns=SHEET_COLUMNS, labels=[_label(results, int(f), fps) for f in picks])
     return Path(path)
-

@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-from pathlib import Path
-
 from doodle.core.errors import DoodleError
 
 
@@ -15,6 +13,7 @@ def add_parser(sub) -> None:
     p.add_argument("--stages", metavar="P,A,E,F", help="frames ending preparation, anticipation, execution, "
                    "follow-through (default: extracted)")
     p.add_argument("-o", "--output", required=True, metavar="OUT.bvh")
+    p.add_argument("--overwrite", action="store_true", help="replace OUT.bvh (and the --compare PNG) if they exist")
     p.add_argument("--compare", metavar="PNG", help="neutral and stylised side by side, with end-effector paths and "
                    "the signature measures (peak speed, execution, extent, impact) of the most moving hand or foot")
     p.add_argument("--cyclic", action="store_true",
@@ -23,13 +22,18 @@ def add_parser(sub) -> None:
 
 
 def cmd_stylize(args) -> int:
-    from retarget.analysis import Stages, guess_roles, stages
+    from doodle.core.files import atomic_files, output_file
+    from retarget.analysis import Stages, stages
     from retarget.bvh import read_bvh_with_unit, write_bvh
     from retarget.stylize import stylize
 
     for name, value in (("--time", args.time), ("--weight", args.weight)):
         if not -1.0 <= value <= 1.0:
             raise DoodleError(f"{name} must be between -1 and 1, not {value:g}")
+    output = output_file(args.output, args.overwrite)
+    compare = output_file(args.compare, args.overwrite) if args.compare else None
+    if compare is not None and compare.resolve() == output.resolve():
+        raise DoodleError(f"{compare}: --compare names the output clip; give the picture a name of its own")
     motion, unit = read_bvh_with_unit(args.clip)
     if args.stages:
         try:
@@ -47,24 +51,34 @@ def cmd_stylize(args) -> int:
         out = cyclic(motion, args.weight)
     else:
         out = stylize(motion, found, args.time, args.weight)
-    Path(args.output).parent.mkdir(parents=True, exist_ok=True)
-    write_bvh(args.output, out, unit=unit)
-    print(f"{args.output}: {out.frames} frames at {out.fps:.4g} fps ({out.duration:.2f} s; neutral "
+    lines = []
+    with atomic_files() as staged:  # the clip and its picture together, or neither
+        write_bvh(staged(output), out, unit=unit)
+        if compare is not None:
+            lines = _compare(motion, out, staged(compare), args)
+    print(f"{output}: {out.frames} frames at {out.fps:.4g} fps ({out.duration:.2f} s; neutral "
           f"{motion.duration:.2f} s), time {args.time:+g}, weight {args.weight:+g}; stages "
           f"{found.preparation},{found.anticipation},{found.execution},{found.follow_through}")
-    if args.compare:
-        from retarget.effort_signature import signature
-        from retarget.preview import compare_picture
-
-        roles = guess_roles(motion.skeleton)
-        before = signature(motion)
-        after = signature(out, before.effector)
-        effectors = [before.effector] + [roles[k] for k in ("right_hand", "left_hand", "right_foot", "left_foot")
-                                         if k in roles and roles[k] != before.effector]
-        lines = [f"{label}: {getattr(before, k):.2f} → {getattr(after, k):.2f} {unit} (×{getattr(after, k) / max(getattr(before, k), 1e-9):.2f})"
-                 for label, k, unit in (("peak speed", "peak_speed", "m/s"), ("execution", "execution", "s"),
-                                        ("extent", "extent", "m"), ("impact", "sharpness", "m/s²"))]
-        print(compare_picture(motion, out, effectors, args.compare, f"time {args.time:+g}, weight {args.weight:+g}",
-                              notes=[f"{motion.skeleton.names[before.effector]}, neutral → styled"] + lines))
+    if compare is not None:
+        print(compare)
         print("  " + "; ".join(lines))
     return 0
+
+
+def _compare(motion, out, path, args) -> list[str]:
+    """Draw the --compare picture to ``path``; the signature measures written on it."""
+    from retarget.analysis import guess_roles
+    from retarget.effort_signature import signature
+    from retarget.preview import compare_picture
+
+    roles = guess_roles(motion.skeleton)
+    before = signature(motion)
+    after = signature(out, before.effector)
+    effectors = [before.effector] + [roles[k] for k in ("right_hand", "left_hand", "right_foot", "left_foot")
+                                     if k in roles and roles[k] != before.effector]
+    lines = [f"{label}: {getattr(before, k):.2f} → {getattr(after, k):.2f} {unit} (×{getattr(after, k) / max(getattr(before, k), 1e-9):.2f})"
+             for label, k, unit in (("peak speed", "peak_speed", "m/s"), ("execution", "execution", "s"),
+                                    ("extent", "extent", "m"), ("impact", "sharpness", "m/s²"))]
+    compare_picture(motion, out, effectors, path, f"time {args.time:+g}, weight {args.weight:+g}",
+                    notes=[f"{motion.skeleton.names[before.effector]}, neutral → styled"] + lines)
+    return lines
