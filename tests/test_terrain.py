@@ -312,10 +312,10 @@ def test_bad_files_raise(tmp_path):
     cases[p] = "no array named 'heights'"
     p = tmp_path / "corrupt.npz"
     p.write_bytes(b"PK\x03\x04 this is not a zip archive")
-    cases[p] = "cannot read"
+    cases[p] = "not a valid .npz archive"
     p = tmp_path / "pickled.npz"
     np.savez(p, heights=np.array([object()], dtype=object))
-    cases[p] = "cannot read"
+    cases[p] = "not a valid .npz archive"
     p = tmp_path / "badspacing.npz"
     np.savez(p, heights=np.zeros((3, 3)), spacing=np.array(-1.0))
     cases[p] = "spacing"
