@@ -661,9 +661,10 @@ def read_edits(path) -> dict:
          "segments": [{"track": "c0", "index": 5, "time": 1.0, "weight": -0.5}]}
     """
     import json
+    from pathlib import Path
 
     try:
-        data = json.loads(open(path, encoding="utf-8").read())
+        data = json.loads(Path(path).read_text(encoding="utf-8"))
     except OSError as e:
         raise DoodleError(f"{path}: cannot read: {e.strerror or e}") from None
     except UnicodeDecodeError as e:

@@ -256,18 +256,36 @@ def row_format(n_tracks: int) -> str:
     return ",".join(["%.6f"] + ["%d" + ",%.6f" * 7] * n_tracks)
 
 
-def _first_bad_field(line: str, columns: list[str]) -> tuple[str, str] | None:
-    """``(column, text)`` of the first field of ``line`` that is not a number, else None."""
+def _is_number(text: str) -> bool:
+    """Whether ``np.loadtxt`` reads ``text`` as a number (stricter than ``float``: no ``1_000``,
+    no digits of other scripts)."""
+    return "," not in text and _is_number_row(text)
+
+
+def _is_number_row(line: str) -> bool:
+    """Whether ``np.loadtxt`` reads every field of ``line``."""
+    try:
+        np.loadtxt([line], delimiter=",", comments=None, dtype=np.float64)
+    except ValueError:
+        return False
+    return True
+
+
+def _first_bad_field(line: str, columns: list[str], strict: bool = False) -> tuple[str, str] | None:
+    """``(column, text)`` of the first field of ``line`` that is not a number (``strict``: as
+    ``np.loadtxt`` reads numbers), else None."""
     for col, text in zip(columns, line.split(",")):
         try:
             float(text)
         except ValueError:
             return col, text
+        if strict and not _is_number(text):
+            return col, text
     return None
 
 
 def _line_parses(line: str, columns: list[str]) -> bool:
-    return line.count(",") == len(columns) - 1 and _first_bad_field(line, columns) is None
+    return line.count(",") == len(columns) - 1 and _first_bad_field(line, columns, strict=True) is None
 
 
 def parse_rows(lines: list[str], columns: list[str], source: str, first_line: int) -> np.ndarray:
@@ -295,12 +313,27 @@ def parse_rows(lines: list[str], columns: list[str], source: str, first_line: in
     try:
         return np.loadtxt(lines, delimiter=",", comments=None, dtype=np.float64, ndmin=2)
     except ValueError as exc:
-        for i, line in enumerate(lines):
-            found = _first_bad_field(line, columns)
-            if found:
-                col, text = found
-                raise DoodleError(f"{where(source, first_line + i, col)}: {text.strip()!r} is not a number") from None
+        found = _locate_bad_field(lines, columns)
+        if found:
+            i, col, text = found
+            raise DoodleError(f"{where(source, first_line + i, col)}: {text.strip()!r} is not a number") from None
         raise DoodleError(f"{source}: cannot parse the data rows: {exc}") from None
+
+
+def _locate_bad_field(lines: list[str], columns: list[str]) -> tuple[int, str, str] | None:
+    """``(line index, column, text)`` of the first field that is not a number: by ``float``
+    first (fast), then as ``np.loadtxt`` reads numbers (no ``1_000``, no digits of other
+    scripts), one line at a time."""
+    for i, line in enumerate(lines):
+        found = _first_bad_field(line, columns)
+        if found:
+            return (i, *found)
+    for i, line in enumerate(lines):
+        if not _is_number_row(line):
+            found = _first_bad_field(line, columns, strict=True)
+            if found:
+                return (i, *found)
+    return None
 
 
 # --------------------------------------------------------------------------- checks
