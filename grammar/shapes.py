@@ -25,6 +25,7 @@ import numpy as np
 
 POINTS = 32  # points per resampled path (31 steps)
 CHUNK = 2048  # paths × templates compared at once (a few MB)
+MAX_METRES = 1000.0  # a shape file's coordinates beyond this are not a hand's path but a corrupt file
 WEIGHT = 31.0  # edits one unit of shape distance counts as (a step whose direction is 1 apart, each step)
 
 
@@ -123,27 +124,26 @@ def save_paths(path, paths: np.ndarray) -> None:
 def load_paths(path, action: str = "") -> np.ndarray:
     """Example paths (k, n, 3) from a shape file; DoodleError naming the file and action."""
     from doodle.core.errors import DoodleError
+    from doodle.core.npz import read_npz
 
     where = f"{path}" + (f" (shape of action {action!r})" if action else "")
-    try:
-        with np.load(path, allow_pickle=False) as z:
-            if "paths" not in z.files:
-                raise DoodleError(f"{where}: no 'paths' array in it")
-            if "format" in z.files and int(z["format"]) != FORMAT:
-                raise DoodleError(f"{where}: shape format {int(z['format'])} is not supported (this version reads 1)")
-            paths = z["paths"]
-    except DoodleError:
-        raise
-    except FileNotFoundError:
-        raise DoodleError(f"{where}: no such file") from None
-    except (OSError, ValueError) as e:
-        raise DoodleError(f"{where}: not a shape file (.npz of example paths): {e}") from None
-    if paths.dtype.kind != "f" or paths.ndim != 3 or paths.shape[0] < 1 or paths.shape[1] < 3 or paths.shape[2] != 3:
-        raise DoodleError(f"{where}: 'paths' must be a float array (examples, points ≥ 3, 3), got "
+    arrays = read_npz(path, where)
+    if "paths" not in arrays:
+        raise DoodleError(f"{where}: no 'paths' array in it")
+    if "format" in arrays:
+        version = arrays["format"]
+        if version.shape != () or version.dtype.kind not in "iu" or int(version) != FORMAT:
+            raise DoodleError(f"{where}: shape format {version.tolist()!r} is not supported (this version reads {FORMAT})")
+    paths = arrays["paths"]
+    if paths.dtype.kind != "f" or paths.ndim != 3 or paths.shape[0] < 1 or paths.shape[1:] != (POINTS, 3):
+        raise DoodleError(f"{where}: 'paths' must be a float array (examples, points = {POINTS}, 3), got "
                           f"{paths.dtype} {paths.shape}")
     if not np.isfinite(paths).all():
         raise DoodleError(f"{where}: 'paths' holds NaN or infinite values")
-    return paths
+    if np.abs(paths).max() > MAX_METRES:
+        raise DoodleError(f"{where}: 'paths' reaches {np.abs(paths).max():.3g} m from its start; "
+                          f"a hand's path stays within {MAX_METRES:g} m")
+    return paths.astype(float)
 
 
 def shape_set(named: dict, expressions: dict, tracks: dict | None = None, cap: float = 20.0,

@@ -9,8 +9,8 @@ Reading (:func:`read_bvh`, :func:`read_bvh_with_unit`):
   matched case-insensitively and stored in canonical spelling, in file order, in
   :attr:`Skeleton.channels`. A joint name is the rest of its ``ROOT``/``JOINT`` line (so
   names with spaces survive). Joints are numbered in file order, so parents come first.
-- MOTION: ``Frames: N`` (a positive integer), ``Frame Time: t`` (a positive number, kept
-  exactly as ``float(t)`` — the rate is never rounded), then N lines of one value per
+- MOTION: ``Frames: N`` (a positive integer), ``Frame Time: t`` (seconds, from 1e-6 to 1000,
+  kept exactly as ``float(t)`` — the rate is never rounded), then N lines of one value per
   channel, joints in file order. Blank lines are skipped; lines after the N-th frame are
   ignored (as other readers do).
 - Rotations: a joint's rotation channels, in the order listed, compose as INTRINSIC
@@ -33,7 +33,9 @@ Reading (:func:`read_bvh`, :func:`read_bvh_with_unit`):
   (centimetres) when the skeleton's rest height — max minus min of the joints' y in the
   rest pose (forward kinematics of the OFFSETs alone, no rotation) — is more than 10 file
   units, else 1.0 (metres). A human is 1–2 m tall, i.e. 100–200 in centimetres.
-- Errors: malformed input raises :class:`DoodleError` whose message starts ``path:line:``.
+- Errors: malformed input raises :class:`DoodleError` whose message starts ``path:line:``;
+  so does a length (OFFSET, End Site, position channel) beyond ±1e7 file units — 100 km in
+  centimetres: a corrupt file, whose sums of offsets would overflow.
 
 Writing (:func:`write_bvh`) keeps each joint's channel layout as stored in the skeleton
 (joints built without one get ``Xposition Yposition Zposition Zrotation Xrotation
@@ -78,6 +80,8 @@ _FRAME_TIME_RE = re.compile(r"^\s*Frame\s+Time\s*:\s*(\S*)\s*$")
 _DEFAULT_ROOT_CHANNELS = POSITION_CHANNELS + ("Zrotation", "Xrotation", "Yrotation")
 _DEFAULT_CHANNELS = ("Zrotation", "Xrotation", "Yrotation")
 UNIT_GUESS_HEIGHT = 10.0  # file units: a rest height above this means centimetres
+MAX_LENGTH = 1e7  # file units an OFFSET or position may reach: 100 km in centimetres; sums stay finite
+MIN_FRAME_TIME, MAX_FRAME_TIME = 1e-6, 1e3  # seconds per frame: rates from 1 MHz down to one frame in 17 minutes
 
 
 # --------------------------------------------------------------------------- reading
@@ -153,6 +157,7 @@ def _parse(text: str, source: str, unit: float | None) -> tuple[Motion, float]:
     frames, frame_time, data_at = _parse_motion_header(lines, motion_at + 1, source)
     width = sum(len(j.channels) for j in joints)
     data = _parse_motion_data(lines, data_at, frames, width, source)
+    _check_positions(data, [c for j in joints for c in j.channels], lines, data_at, source)
 
     names = tuple(j.name for j in joints)
     parents = np.array([j.parent for j in joints], dtype=np.int64)
@@ -255,8 +260,8 @@ def _parse_hierarchy(lines: list[str], source: str, motion_line: int | None) -> 
             offset = np.array([float(v) for v in values])
         except ValueError:
             fail(i, f"bad OFFSET of {what}: {' '.join(values)!r} is not 3 numbers")
-        if not np.all(np.isfinite(offset)):
-            fail(i, f"bad OFFSET of {what}: values must be finite")
+        if not np.all(np.isfinite(offset)) or np.abs(offset).max() > MAX_LENGTH:
+            fail(i, f"bad OFFSET of {what}: values must be finite, within ±{MAX_LENGTH:g} file units")
         return offset, end
 
     if n == 0:
@@ -405,9 +410,9 @@ def _parse_motion_header(lines: list[str], k: int, source: str) -> tuple[int, fl
         frame_time = float(m.group(1))
     except ValueError:
         frame_time = float("nan")
-    if not (math.isfinite(frame_time) and frame_time > 0):
-        raise DoodleError(f"{where(source, k + 1)}: Frame Time must be a positive number of seconds, "
-                          f"not {m.group(1)!r}")
+    if not (math.isfinite(frame_time) and MIN_FRAME_TIME <= frame_time <= MAX_FRAME_TIME):
+        raise DoodleError(f"{where(source, k + 1)}: Frame Time must be a positive number of seconds, from "
+                          f"{MIN_FRAME_TIME:g} to {MAX_FRAME_TIME:g}, not {m.group(1)!r}")
     return frames, frame_time, k + 1
 
 
@@ -474,6 +479,19 @@ def _diagnose_motion_data(lines: list[str], start: int, frames: int, width: int,
         raise DoodleError(f"{where(source, max(last, 1))}: file is truncated: it ends after {len(rows)} of "
                           f"{frames} frames (Frames: {frames})")
     return np.array(rows, dtype=float).reshape(frames, width)
+
+
+def _check_positions(data: np.ndarray, channels: list[str], lines: list[str], start: int, source: str) -> None:
+    """Position channels within ±:data:`MAX_LENGTH` file units; else an error naming the line."""
+    cols = [k for k, c in enumerate(channels) if c in POSITION_CHANNELS]
+    bad = np.argwhere(np.abs(data[:, cols]) > MAX_LENGTH)
+    if len(bad):
+        frame, col = int(bad[0][0]), cols[int(bad[0][1])]
+        k = start
+        for _ in range(frame + 1):  # the frame's line: blank lines do not count
+            k = _next_nonblank(lines, k) + 1
+        raise DoodleError(f"{where(source, k)}: {channels[col]} {data[frame, col]:g} on motion line (frame "
+                          f"{frame + 1}) is beyond ±{MAX_LENGTH:g} file units")
 
 
 def _is_float(text: str) -> bool:

@@ -56,10 +56,12 @@ def read_map(path) -> list[dict]:
     try:
         data = tomllib.loads(Path(path).read_text(encoding="utf-8"))
     except OSError as e:
-        raise DoodleError(f"{path}: cannot read: {e.strerror}") from None
-    except tomllib.TOMLDecodeError as e:
+        raise DoodleError(f"{path}: cannot read: {e.strerror or e}") from None
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as e:
         raise DoodleError(f"{path}: not valid TOML: {e}") from None
     rules = data.get("map", [])
+    if not isinstance(rules, list):
+        raise DoodleError(f"{path}: 'map' must be an array of tables ([[map]])")
     for i, rule in enumerate(rules, 1):
         if not isinstance(rule, dict) or not isinstance(rule.get("match"), str) or not isinstance(rule.get("action"), str):
             raise DoodleError(f"{path}: map #{i}: needs 'match' (a glob) and 'action' (a name)")

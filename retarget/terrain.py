@@ -22,7 +22,8 @@ Three terrains share that duck-typed interface (see :class:`Terrain`):
   whose ray hits nothing at all (outside the mesh's xz footprint, or through a hole)
   keeps its x and z and takes the height of the mesh vertex nearest to it in xz.
 
-trimesh is used only to *load* mesh files (OBJ, PLY, GLB, STL…); nothing else of it.
+OBJ files are read by :mod:`retarget.objfile` (errors name the line); trimesh is used only to
+*load* other mesh files (PLY, GLB, STL…); nothing else of it.
 
 :func:`parse_terrain` turns a command-line spec into a terrain; :func:`sample_elevation`
 gives a real digital elevation model (matplotlib's bundled Jacksboro fault DEM) rescaled
@@ -40,6 +41,7 @@ from typing import Protocol, runtime_checkable
 import numpy as np
 
 from doodle.core.errors import DoodleError
+from doodle.core.npz import read_npz
 
 __all__ = [
     "Terrain",
@@ -66,6 +68,12 @@ SAMPLE_RELIEF_RATIO = {"jacksboro": 0.028, "s1045": 0.15}
 
 #: Names accepted by :func:`sample_elevation` (and as terrain specs).
 SAMPLE_NAMES = ("jacksboro", "s1045")
+
+#: How far from the origin a terrain may reach, and the finest grid spacing (metres): a room, a
+#: landscape, and far more, while squares and differences of coordinates stay finite — a
+#: file beyond them is corrupt, not a terrain.
+MAX_METRES = 1e6
+MIN_SPACING = 1e-6
 
 # Barycentric tolerance (dimensionless): rays through a shared edge or vertex still hit.
 _BARY_TOL = 1e-9
@@ -168,15 +176,21 @@ class HeightField:
         if not np.all(np.isfinite(h)):
             bad = int(np.count_nonzero(~np.isfinite(h)))
             raise DoodleError(f"height field: heights contain {bad} NaN or infinite values")
+        if np.abs(h).max() > MAX_METRES:
+            raise DoodleError(f"height field: heights reach {np.abs(h).max():.3g} m; at most {MAX_METRES:g} m")
         spacing = _finite_float(self.spacing, "height field spacing")
         if spacing <= 0:
             raise DoodleError(f"height field: spacing must be > 0, got {spacing}")
+        if not MIN_SPACING <= spacing * (max(h.shape) - 1) <= MAX_METRES or spacing < MIN_SPACING:
+            raise DoodleError(f"height field: spacing {spacing:g} m makes a grid of {spacing * (max(h.shape) - 1):.3g} m; "
+                              f"spacing at least {MIN_SPACING:g} m and a grid at most {MAX_METRES:g} m")
         try:
             origin = np.asarray(self.origin, dtype=float).reshape(-1)
         except (TypeError, ValueError):
             raise DoodleError(f"height field: origin must be (x0, z0), got {self.origin!r}") from None
-        if origin.shape != (2,) or not np.all(np.isfinite(origin)):
-            raise DoodleError(f"height field: origin must be two finite numbers (x0, z0), got {self.origin!r}")
+        if origin.shape != (2,) or not np.all(np.isfinite(origin)) or np.abs(origin).max() > MAX_METRES:
+            raise DoodleError(f"height field: origin must be two numbers (x0, z0) within {MAX_METRES:g} m, "
+                              f"got {self.origin!r}")
         object.__setattr__(self, "heights", _readonly(h))
         object.__setattr__(self, "spacing", spacing)
         object.__setattr__(self, "origin", (float(origin[0]), float(origin[1])))
@@ -333,6 +347,8 @@ class Mesh:
             raise DoodleError(f"mesh: vertices must have shape (V, 3) with V >= 3, got {v.shape}")
         if not np.all(np.isfinite(v)):
             raise DoodleError("mesh: vertices contain NaN or infinite values")
+        if np.abs(v).max() > MAX_METRES:
+            raise DoodleError(f"mesh: vertices reach {np.abs(v).max():.3g} m from the origin; at most {MAX_METRES:g} m")
         f = np.asarray(self.faces)
         if f.ndim != 2 or f.shape[1] != 3 or len(f) < 1:
             raise DoodleError(f"mesh: faces must have shape (F, 3) with F >= 1, got {f.shape}")
@@ -499,30 +515,49 @@ class Mesh:
 
 
 def load_mesh(path, spec: str | None = None) -> Mesh:
-    """Load a triangle mesh file (OBJ, PLY, GLB, STL… — anything ``trimesh.load`` reads)."""
+    """Load a triangle mesh file: OBJ by :mod:`retarget.objfile` (errors name the line), any
+    other format ``trimesh.load`` reads (PLY, GLB, STL…) by trimesh."""
     where = f"terrain {spec!r}: " if spec else "terrain: "
     p = Path(path)
     if not p.is_file():
         raise DoodleError(f"{where}mesh file {str(p)!r} not found")
-    try:
-        import trimesh
-    except ImportError:
-        raise DoodleError(f"{where}loading mesh {str(p)!r} needs the trimesh package (pip install trimesh)") from None
-    try:
-        m = trimesh.load(str(p), force="mesh")
-        vertices = np.asarray(m.vertices, dtype=float)
-        faces = np.asarray(m.faces)
-    except DoodleError:
-        raise
-    except Exception as exc:  # trimesh raises many types for unreadable files
-        msg = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
-        raise DoodleError(f"{where}cannot read mesh file {str(p)!r}: {msg}") from None
+    if p.suffix.lower() == ".obj":
+        from retarget.objfile import read_obj
+
+        try:
+            vertices, faces = read_obj(p, MAX_METRES)
+        except DoodleError as exc:
+            raise DoodleError(f"{where}{exc}") from None
+    else:
+        vertices, faces = _trimesh_load(p, where)
     if faces.ndim != 2 or len(faces) == 0 or len(vertices) < 3:
         raise DoodleError(f"{where}mesh file {str(p)!r} has no triangles")
     try:
         return Mesh(vertices, faces)
     except DoodleError as exc:
         raise DoodleError(f"{where}mesh file {str(p)!r}: {exc}") from None
+
+
+def _trimesh_load(p: Path, where: str) -> tuple[np.ndarray, np.ndarray]:
+    """Vertices and faces of a mesh file trimesh reads; its warnings silenced (a broken file
+    is refused with the reason, not accompanied by numpy's overflow notes)."""
+    import warnings
+
+    try:
+        import trimesh
+    except ImportError:
+        raise DoodleError(f"{where}loading mesh {str(p)!r} needs the trimesh package (pip install trimesh)") from None
+    try:
+        with warnings.catch_warnings(), np.errstate(all="ignore"):
+            warnings.simplefilter("ignore")
+            m = trimesh.load(str(p), force="mesh")
+            vertices = np.asarray(m.vertices, dtype=float)
+            faces = np.asarray(m.faces)
+    except Exception as exc:  # trimesh raises many types for unreadable files
+        msg = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+        kind = p.suffix.lstrip(".").upper() or "mesh"
+        raise DoodleError(f"{where}cannot read mesh file {str(p)!r}: not a valid {kind} file ({msg})") from None
+    return vertices, faces
 
 
 def load_heightfield(path, spacing: float | None = None, spec: str | None = None) -> HeightField:
@@ -532,22 +567,14 @@ def load_heightfield(path, spacing: float | None = None, spec: str | None = None
     p = Path(path)
     if not p.is_file():
         raise DoodleError(f"{where}height field file {str(p)!r} not found")
-    try:
-        with np.load(p, allow_pickle=False) as data:
-            if not hasattr(data, "files"):
-                raise DoodleError(f"{where}{str(p)!r} is not an .npz archive (need an array named 'heights')")
-            if "heights" not in data.files:
-                raise DoodleError(
-                    f"{where}{str(p)!r} has no array named 'heights' (found: {', '.join(data.files) or 'none'})"
-                )
-            heights = np.array(data["heights"])
-            file_spacing = np.array(data["spacing"]) if "spacing" in data.files else None
-            origin = np.array(data["origin"]) if "origin" in data.files else None
-    except DoodleError:
-        raise
-    except Exception as exc:
-        raise DoodleError(f"{where}cannot read height field file {str(p)!r}: {exc}") from None
-    if not (np.issubdtype(heights.dtype, np.number) and not np.iscomplexobj(heights)):
+    data = read_npz(p, f"{where}height field file {str(p)!r}")
+    if "heights" not in data:
+        raise DoodleError(f"{where}{str(p)!r} has no array named 'heights' (found: {', '.join(data) or 'none'})")
+    heights, file_spacing, origin = data["heights"], data.get("spacing"), data.get("origin")
+    for name, value in (("spacing", file_spacing), ("origin", origin)):
+        if value is not None and (value.dtype.kind not in "fiu"):
+            raise DoodleError(f"{where}{str(p)!r}: {name!r} must be real numbers, got dtype {value.dtype}")
+    if heights.dtype.kind not in "fiu":
         raise DoodleError(f"{where}{str(p)!r}: 'heights' must be real numbers, got dtype {heights.dtype}")
     if spacing is None:
         if file_spacing is not None:
@@ -593,8 +620,8 @@ def sample_elevation(name: str = "jacksboro", size: float = 20.0) -> HeightField
     is centred on the origin in x and z.
     """
     size = _finite_float(size, "sample elevation size")
-    if size <= 0:
-        raise DoodleError(f"terrain: sample elevation size must be > 0 metres, got {size}")
+    if not 0 < size <= MAX_METRES:
+        raise DoodleError(f"terrain: sample elevation size must be > 0 and at most {MAX_METRES:g} metres, got {size}")
     if name not in SAMPLE_NAMES:
         raise DoodleError(f"terrain: unknown sample elevation {name!r} (known: {', '.join(SAMPLE_NAMES)})")
     grid = _sample_grid(name)
@@ -634,8 +661,8 @@ def parse_terrain(spec: str):
         return Flat(number(rest, "flat height") if sep else 0.0)
     if kind in SAMPLE_NAMES:
         size = number(rest, "size in metres") if sep else 20.0
-        if size <= 0:
-            raise DoodleError(f"terrain {spec!r}: size must be > 0 metres, got {size}")
+        if not 0 < size <= MAX_METRES:
+            raise DoodleError(f"terrain {spec!r}: size must be > 0 and at most {MAX_METRES:g} metres, got {size}")
         return sample_elevation(kind, size)
     if kind == "heightfield":
         if not rest:

@@ -50,7 +50,7 @@ def _doodle(n=50, seed=0, invalid=True):
     t -= t[0]
     tracks = []
     for k, (role, serial) in enumerate([("right_hand", "LHR-1"), ("left_hand", "")]):
-        p = rng.normal(size=(n, 3))
+        p = rng.normal(size=3) + np.cumsum(rng.normal(scale=0.01, size=(n, 3)), axis=0)  # a hand moves: no jumps
         q = Rotation.random(n, random_state=seed + k).as_quat()
         valid = np.ones(n, bool)
         if invalid:

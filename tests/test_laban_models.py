@@ -84,13 +84,13 @@ def test_model_file_round_trip_and_bad_files(tmp_path):
     with pytest.raises(DoodleError, match="no such model file"):
         load(tmp_path / "missing.npz")
     (tmp_path / "junk.npz").write_bytes(b"not a zip at all")
-    with pytest.raises(DoodleError, match="junk.npz: not a readable model file"):
+    with pytest.raises(DoodleError, match="junk.npz: not a valid .npz archive \\(not a zip archive\\)"):
         load(tmp_path / "junk.npz")
     data = dict(np.load(path, allow_pickle=False))
     broken = dict(data)
     broken["drive_means"] = broken["drive_means"][:, :, :3]
     np.savez(tmp_path / "shapes.npz", **broken)
-    with pytest.raises(DoodleError, match="drive HMM arrays do not agree"):
+    with pytest.raises(DoodleError, match="array .drive_means. must be numbers shaped 8×6×19"):
         load(tmp_path / "shapes.npz")
     meta = json.loads(str(data["meta"]))
     meta["summary_names"] = meta["summary_names"][::-1]
@@ -210,4 +210,4 @@ def test_laban_commands(tmp_path, capsys):
     err = capsys.readouterr().err
     assert "SteamVR" in err and "doodle laban label" in err and "Traceback" not in err
     assert main(["compile", str(DEMO), "-o", str(tmp_path / "c"), "--effort-model", str(files[1])]) == 1
-    assert "not a readable model file" in capsys.readouterr().err
+    assert "take1.doodle: not a valid .npz archive" in capsys.readouterr().err

@@ -312,10 +312,10 @@ def test_bad_files_raise(tmp_path):
     cases[p] = "no array named 'heights'"
     p = tmp_path / "corrupt.npz"
     p.write_bytes(b"PK\x03\x04 this is not a zip archive")
-    cases[p] = "cannot read"
+    cases[p] = "not a valid .npz archive"
     p = tmp_path / "pickled.npz"
     np.savez(p, heights=np.array([object()], dtype=object))
-    cases[p] = "cannot read"
+    cases[p] = "not a valid .npz archive"
     p = tmp_path / "badspacing.npz"
     np.savez(p, heights=np.zeros((3, 3)), spacing=np.array(-1.0))
     cases[p] = "spacing"
@@ -350,3 +350,23 @@ def test_bad_arrays_raise():
         Mesh(np.zeros((3, 3)), np.array([[0, 1, 3]]))
     with pytest.raises(DoodleError, match="vertices"):
         Mesh(np.zeros((3, 2)), np.array([[0, 1, 2]]))
+
+
+def test_obj_reader_reads_what_exporters_write(tmp_path):
+    """Our OBJ reader: texture/normal references, negative indices, polygons as fans, vertex
+    colours, continuation lines, every other statement skipped."""
+    from retarget.objfile import read_obj
+
+    path = tmp_path / "export.obj"
+    path.write_text("# Blender\nmtllib a.mtl\no Plane\nv -1 0 -1 0.5 0.5 0.5\nv 1 0 -1\nv 1 0 1 1.0\nv -1 0 1\n"
+                    "vt 0 0\nvn 0 1 0\nusemtl grass\ns off\nf 1/1/1 2/1/1 \\\n 3/1/1 4/1/1\nf -4//1 -2//1 -1//1\n")
+    vertices, faces = read_obj(path)
+    assert vertices.shape == (4, 3) and faces.tolist() == [[0, 1, 2], [0, 2, 3], [0, 2, 3]]
+    ground = parse_terrain(f"mesh:{path}")
+    np.testing.assert_allclose(ground.height([[0.2, 0.3]]), [0.0])
+    path.write_text("v 0 0 0\nv 1 0 0\nv 0 0 1\nf 1 2 3\nbogus 1 2\n")
+    with pytest.raises(DoodleError, match=r"export.obj:5: 'bogus' is not an OBJ statement"):
+        read_obj(path)
+    path.write_text("v 0 0 nan\n")
+    with pytest.raises(DoodleError, match=r"export.obj:1: vertex coordinate nan is not a finite number"):
+        read_obj(path)

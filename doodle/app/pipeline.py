@@ -661,15 +661,22 @@ def read_edits(path) -> dict:
          "segments": [{"track": "c0", "index": 5, "time": 1.0, "weight": -0.5}]}
     """
     import json
+    from pathlib import Path
 
     try:
-        data = json.loads(open(path, encoding="utf-8").read())
+        data = json.loads(Path(path).read_text(encoding="utf-8"))
     except OSError as e:
-        raise DoodleError(f"{path}: cannot read: {e.strerror}") from None
+        raise DoodleError(f"{path}: cannot read: {e.strerror or e}") from None
+    except UnicodeDecodeError as e:
+        raise DoodleError(f"{path}: not UTF-8 text ({e.reason} at byte {e.start})") from None
     except json.JSONDecodeError as e:
         raise DoodleError(f"{path}:{e.lineno}: not valid JSON: {e.msg}") from None
+    except RecursionError:
+        raise DoodleError(f"{path}: not valid JSON: nested too deeply") from None
     if not isinstance(data, dict):
         raise DoodleError(f"{path}: expected a JSON object with 'segments'")
+    if not isinstance(data.get("segments", []), list):
+        raise DoodleError(f"{path}: 'segments' must be a list of objects")
     out = {}
 
     def quality(entry, where):

@@ -13,21 +13,27 @@ Values: positions in metres, quaternions xyzw. A NaN in any of a track's seven v
 row marks that sample invalid (lost tracking) for that track; otherwise the quaternion's
 norm must be within 0.1 of 1 (it is renormalised). Times are seconds, strictly increasing;
 ``Track.t`` is seconds from the first sample. Poses are converted from the file's
-coordinate convention to ours.
+coordinate convention to ours. A recording cut off mid-line (a crash while exporting) loads up
+to its last whole row, with a warning, as a doodle file does; a malformed line before the
+last is an error.
 """
 
 from __future__ import annotations
 
 import csv
+import math
 import re
+import warnings
 from pathlib import Path
 
 import numpy as np
 
 from doodle.input.conventions import convention_matrix, to_ours
 from doodle.core.errors import DoodleError, where
-from doodle.input.fileformat import NAME_RE, check_count, check_finite_or_nan, check_poses, check_times
+from doodle.input.fileformat import (MAX_RATE, MIN_RATE, NAME_RE, check_count, check_finite_or_nan, check_poses,
+                                     check_times)
 from doodle.core.model import Doodle, Track
+from doodle.input.repair import drop_impossible
 
 POSE_FIELDS = ("px", "py", "pz", "qx", "qy", "qz", "qw")
 TIME_NAMES = ("t", "time", "timestamp")
@@ -133,6 +139,12 @@ def _index(spec, header: list[str] | None, width: int, source: str, ours: str) -
     return header.index(spec)
 
 
+def _row_parses(line: str, width: int, used: list[int]) -> bool:
+    """Whether a data line has ``width`` fields and numbers in the ``used`` ones."""
+    fields = line.split(",")
+    return len(fields) == width and all(_is_number(fields[j]) for j in used)
+
+
 def _parse_data(rows: list[str], linenos: list[int], width: int, used: list[int], names: list[str], source: str):
     """Parse the used columns of the data lines into a float array ``(n, len(used))``."""
     fields = [line.split(",") for line in rows]
@@ -166,8 +178,11 @@ def read_csv(
     ``1/median(dt)`` rounded to 0.1 Hz. Blank lines are skipped. The first non-empty line is
     a header row if any of its fields is not a number.
 
-    A NaN in any of a track's 7 values on a row marks that sample invalid (lost tracking).
-    Raises DoodleError (naming the file, and the line and column where there is one) for:
+    A NaN in any of a track's 7 values on a row marks that sample invalid (lost tracking), and
+    so does a physically impossible position (:func:`doodle.input.repair.drop_impossible`,
+    with a warning). A last line without a newline that does not parse is dropped with a
+    warning (``warnings.warn``). Raises DoodleError (naming the file, and the line and column
+    where there is one) for:
     no header and no column map, a missing column, no time column and no rate, a row with
     the wrong number of fields, a value that is not a number or is infinite, a zero or
     non-unit quaternion, times that are not finite or do not strictly increase, fewer
@@ -209,6 +224,12 @@ def read_csv(
             used.append(_index(spec, header, width, source, f"{track}.{f}"))
             names.append(header[used[-1]] if header else f"{track}.{f}")
 
+    cut = not text.endswith("\n") and numbered and numbered[-1][0] == text.count("\n") + 1
+    if cut and not _row_parses(numbered[-1][1], width, used):
+        lineno = numbered[-1][0]
+        numbered = numbered[:-1]
+        warnings.warn(f"{source}:{lineno}: last row is incomplete (cut off?); loaded {len(numbered)} whole rows",
+                      stacklevel=2)
     linenos = np.array([n for n, _ in numbered], dtype=np.int64)
     values = _parse_data([line for _, line in numbered], list(linenos), width, used, names, source)
     check_count(len(values), source)
@@ -220,17 +241,24 @@ def read_csv(
     else:
         t = np.arange(len(values)) / float(rate)
     if rate is None:
-        rate = round(1.0 / float(np.median(np.diff(t))), 1)
+        step = float(np.median(np.diff(t)))
+        rate = round(1.0 / step, 1) if step > 1.0 / MAX_RATE / 10 else math.inf
+        if not MIN_RATE <= rate <= MAX_RATE:
+            raise DoodleError(f"{source}: samples {step:.3g} apart on median make a rate of {rate:g} Hz, outside "
+                              f"{MIN_RATE:g}–{MAX_RATE:g} Hz: are the times in seconds?")
     rate = float(rate)
-    if not np.isfinite(rate) or rate <= 0:
-        raise DoodleError(f"{source}: rate must be a number > 0, got {rate}")
+    if not MIN_RATE <= rate <= MAX_RATE:
+        raise DoodleError(f"{source}: rate must be a number from {MIN_RATE:g} to {MAX_RATE:g} Hz, got {rate}")
 
     rel_t = t - t[0]
+    base = 1 if time_spec is not None else 0  # the time column leads ``names``
     tracks = []
     for j, track in enumerate(track_specs):
         block = values[:, 7 * j : 7 * j + 7]
         ok = ~np.isnan(block).any(axis=1)
-        p, q = check_poses(ok, block[:, :3], block[:, 3:], source, linenos, track)
+        cols = names[base + 7 * j : base + 7 * j + 7]
+        p, q = check_poses(ok, block[:, :3], block[:, 3:], source, linenos, track, cols)
+        ok, p, q = drop_impossible(rel_t, p, q, ok, source, linenos, track, cols[:3])
         p, q = to_ours(p, q, convention)
         tracks.append(Track(track, rel_t, p, q, ok))
     return Doodle(tuple(tracks), rate, device, source, {})

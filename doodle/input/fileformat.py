@@ -14,7 +14,7 @@ Layout::
     0.000000,1,0.258747,0.378101,-0.036361,0.393373,-0.011139,0.107187,0.913041,1,...
 
 - Line 1 is exactly ``# doodle 1`` (magic and format version).
-- Header lines ``# KEY VALUE``: ``device`` (text), ``rate`` (nominal Hz, > 0), ``units``
+- Header lines ``# KEY VALUE``: ``device`` (text), ``rate`` (nominal Hz, 1 to 1000), ``units``
   (``m``, ``cm`` or ``mm``; positions are converted to metres on load), ``convention`` (a
   name of :data:`doodle.input.conventions.CONVENTIONS`), and one ``track NAME [role=R]
   [serial=S]`` per track (names unique, ``[A-Za-z0-9_-]+``). All of these are required
@@ -47,6 +47,7 @@ from doodle.input.conventions import CONVENTIONS, from_ours, to_ours
 from doodle.core.errors import DoodleError, where
 from doodle.core.files import atomic_write
 from doodle.core.model import Doodle, Track
+from doodle.input.repair import drop_impossible
 
 VERSION = 1
 SUPPORTED_VERSIONS = (1,)
@@ -56,6 +57,8 @@ FIELDS = ("ok", "px", "py", "pz", "qx", "qy", "qz", "qw")
 REQUIRED = ("device", "rate", "units", "convention")
 NAME_RE = re.compile(r"[A-Za-z0-9_-]+")
 QUAT_NORM_TOL = 0.1
+MIN_RATE, MAX_RATE = 1.0, 1000.0  # Hz a tracker may sample at: kernels in seconds stay a sane size
+MAX_TIME = 1e12  # s: beyond any clock's seconds (30 000 years), and differences of times stay finite
 SYNC_EVERY_S = 1.0  # DoodleWriter: flush + fsync at most this often (sample time)
 
 
@@ -96,8 +99,8 @@ def format_header(
     if units not in UNITS:
         raise DoodleError(f"unknown units {units!r} (known: {', '.join(UNITS)})")
     rate = float(rate)
-    if not np.isfinite(rate) or rate <= 0:
-        raise DoodleError(f"rate must be a number > 0, got {rate}")
+    if not MIN_RATE <= rate <= MAX_RATE:
+        raise DoodleError(f"rate must be a number from {MIN_RATE:g} to {MAX_RATE:g} Hz, got {rate}")
     device = " ".join(str(device).split())
     if not device:
         raise DoodleError("device must not be empty")
@@ -217,8 +220,8 @@ def _parse_value(key: str, value: str, source: str, line: int):
             rate = float(value)
         except ValueError:
             rate = float("nan")
-        if not np.isfinite(rate) or rate <= 0:
-            raise DoodleError(f"{place}: rate must be a number > 0 (Hz), got {value!r}")
+        if not MIN_RATE <= rate <= MAX_RATE:
+            raise DoodleError(f"{place}: rate must be a number from {MIN_RATE:g} to {MAX_RATE:g} (Hz), got {value!r}")
         return rate
     if key == "units":
         if value not in UNITS:
@@ -253,18 +256,36 @@ def row_format(n_tracks: int) -> str:
     return ",".join(["%.6f"] + ["%d" + ",%.6f" * 7] * n_tracks)
 
 
-def _first_bad_field(line: str, columns: list[str]) -> tuple[str, str] | None:
-    """``(column, text)`` of the first field of ``line`` that is not a number, else None."""
+def _is_number(text: str) -> bool:
+    """Whether ``np.loadtxt`` reads ``text`` as a number (stricter than ``float``: no ``1_000``,
+    no digits of other scripts)."""
+    return "," not in text and _is_number_row(text)
+
+
+def _is_number_row(line: str) -> bool:
+    """Whether ``np.loadtxt`` reads every field of ``line``."""
+    try:
+        np.loadtxt([line], delimiter=",", comments=None, dtype=np.float64)
+    except ValueError:
+        return False
+    return True
+
+
+def _first_bad_field(line: str, columns: list[str], strict: bool = False) -> tuple[str, str] | None:
+    """``(column, text)`` of the first field of ``line`` that is not a number (``strict``: as
+    ``np.loadtxt`` reads numbers), else None."""
     for col, text in zip(columns, line.split(",")):
         try:
             float(text)
         except ValueError:
             return col, text
+        if strict and not _is_number(text):
+            return col, text
     return None
 
 
 def _line_parses(line: str, columns: list[str]) -> bool:
-    return line.count(",") == len(columns) - 1 and _first_bad_field(line, columns) is None
+    return line.count(",") == len(columns) - 1 and _first_bad_field(line, columns, strict=True) is None
 
 
 def parse_rows(lines: list[str], columns: list[str], source: str, first_line: int) -> np.ndarray:
@@ -292,12 +313,27 @@ def parse_rows(lines: list[str], columns: list[str], source: str, first_line: in
     try:
         return np.loadtxt(lines, delimiter=",", comments=None, dtype=np.float64, ndmin=2)
     except ValueError as exc:
-        for i, line in enumerate(lines):
-            found = _first_bad_field(line, columns)
-            if found:
-                col, text = found
-                raise DoodleError(f"{where(source, first_line + i, col)}: {text.strip()!r} is not a number") from None
+        found = _locate_bad_field(lines, columns)
+        if found:
+            i, col, text = found
+            raise DoodleError(f"{where(source, first_line + i, col)}: {text.strip()!r} is not a number") from None
         raise DoodleError(f"{source}: cannot parse the data rows: {exc}") from None
+
+
+def _locate_bad_field(lines: list[str], columns: list[str]) -> tuple[int, str, str] | None:
+    """``(line index, column, text)`` of the first field that is not a number: by ``float``
+    first (fast), then as ``np.loadtxt`` reads numbers (no ``1_000``, no digits of other
+    scripts), one line at a time."""
+    for i, line in enumerate(lines):
+        found = _first_bad_field(line, columns)
+        if found:
+            return (i, *found)
+    for i, line in enumerate(lines):
+        if not _is_number_row(line):
+            found = _first_bad_field(line, columns, strict=True)
+            if found:
+                return (i, *found)
+    return None
 
 
 # --------------------------------------------------------------------------- checks
@@ -321,6 +357,11 @@ def check_times(t: np.ndarray, source: str, linenos: np.ndarray, column: str = "
     if nonfinite.size:
         i = int(nonfinite[0])
         raise DoodleError(f"{where(source, int(linenos[i]), column)}: time {t[i]} is not a finite number")
+    huge = np.flatnonzero(np.abs(t) > MAX_TIME)
+    if huge.size:
+        i = int(huge[0])
+        raise DoodleError(f"{where(source, int(linenos[i]), column)}: time {t[i]:g} s is beyond ±{MAX_TIME:g} s "
+                          "(seconds are expected)")
     back = np.flatnonzero(np.diff(t) <= 0)
     if back.size:
         i = int(back[0]) + 1
@@ -340,30 +381,33 @@ def check_count(n: int, source: str) -> None:
 
 
 def check_poses(
-    ok: np.ndarray, p: np.ndarray, q: np.ndarray, source: str, linenos: np.ndarray, track: str
+    ok: np.ndarray, p: np.ndarray, q: np.ndarray, source: str, linenos: np.ndarray, track: str,
+    columns: list[str] | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Validate one track's samples and return ``(p, q)`` cleaned.
 
     Where ``ok``: all 7 values must be finite and the quaternion's norm within 0.1 of 1
     (it is renormalised). Where not ``ok``: values become NaN. Raises DoodleError naming
-    file, line and track otherwise.
+    file, line and column (``columns``: the 7 names of px … qw in the file, by default
+    ``TRACK.px`` … ``TRACK.qw``) otherwise.
     """
+    columns = columns or [f"{track}.{f}" for f in FIELDS[1:]]
     p = np.array(p, dtype=float)
     q = np.array(q, dtype=float)
-    finite = np.isfinite(p).all(axis=1) & np.isfinite(q).all(axis=1)
-    bad = np.flatnonzero(ok & ~finite)
+    values = np.concatenate([p, q], axis=1)
+    bad = np.argwhere(ok[:, None] & ~np.isfinite(values))
     if bad.size:
-        i = int(bad[0])
-        raise DoodleError(
-            f"{where(source, int(linenos[i]))}: track {track}: sample marked ok has a value that is not finite"
-        )
-    norm = np.linalg.norm(np.where(ok[:, None], q, 1.0), axis=1)
+        i, j = (int(k) for k in bad[0])
+        raise DoodleError(f"{where(source, int(linenos[i]), columns[j])}: track {track}: {values[i, j]} in a "
+                          "sample marked tracked (every value of a tracked sample must be a finite number)")
+    with np.errstate(over="ignore"):  # a component of 1e200 is a norm of inf: refused below
+        norm = np.linalg.norm(np.where(ok[:, None], q, 1.0), axis=1)
     bad = np.flatnonzero(ok & (np.abs(norm - 1.0) > QUAT_NORM_TOL))
     if bad.size:
         i = int(bad[0])
-        what = "zero quaternion" if norm[i] == 0 else f"quaternion norm {norm[i]:.4f} is not within {QUAT_NORM_TOL} of 1"
-        raise DoodleError(f"{where(source, int(linenos[i]))}: track {track}: {what}")
-    q = q / norm[:, None]
+        what = "zero quaternion" if norm[i] == 0 else f"quaternion norm {norm[i]:.4g} is not within {QUAT_NORM_TOL} of 1"
+        raise DoodleError(f"{where(source, int(linenos[i]), f'{columns[3]}…{columns[6]}')}: track {track}: {what}")
+    q = q / np.where(ok, norm, 1.0)[:, None]
     p[~ok] = np.nan
     q[~ok] = np.nan
     return p, q
@@ -430,7 +474,8 @@ def read_doodle(path) -> Doodle:
             raise DoodleError(f"{where(source, int(linenos[i]), f'{name}.ok')}: ok must be 1 or 0, got {okv[i]:g}")
         ok = okv == 1
         p, q = check_poses(ok, values[:, c + 1 : c + 4], values[:, c + 4 : c + 8], source, linenos, name)
-        p, q = to_ours(p * scale, q, header["convention"])
+        ok, p, q = drop_impossible(rel_t, p * scale, q, ok, source, linenos, name, columns[c + 1 : c + 4])
+        p, q = to_ours(p, q, header["convention"])
         tracks.append(Track(name, rel_t, p, q, ok, role=role, serial=serial))
     return Doodle(tuple(tracks), header["rate"], header["device"], source, dict(header["meta"]))
 

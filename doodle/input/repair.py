@@ -1,5 +1,13 @@
 """Checks and repairs of raw track samples before segmentation.
 
+Physically impossible samples are lost tracking too (:func:`impossible`, applied by the file
+readers through :func:`drop_impossible`, with a warning naming the file, line and column): a
+tracked position more than :data:`MAX_RADIUS` from the origin (no tracked space is that
+large), or one the hand could only have reached from the samples around it faster than
+:data:`MAX_SPEED` (a real hand peaks at 10–15 m/s; the real recordings' fastest step between
+samples, jitter included, is about 21 m/s). Such a sample is a tracking glitch, not motion:
+kept, one 1000 m spike would be a stroke the Matcher reads as a gesture.
+
 Documented repair for lost tracking (``valid == False``):
 
 * a gap inside the track of at most ``max_gap`` seconds (from the last tracked sample to the
@@ -16,10 +24,80 @@ untracked samples until tracking returns and then releases them, with identical 
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 
 from doodle.core import quat
-from doodle.core.errors import DoodleError
+from doodle.core.errors import DoodleError, where
+
+MAX_RADIUS = 100.0  # m from the origin, per axis: ten times the largest tracked room
+MAX_SPEED = 50.0  # m/s between samples: over twice the fastest step of real recordings
+SLACK = 0.02  # m: tracking noise allowed on top, so samples close in time need not agree exactly
+SHOWN = 5  # lines of impossible samples a warning lists
+
+
+def impossible(t: np.ndarray, p: np.ndarray, valid: np.ndarray) -> np.ndarray:
+    """Which tracked samples are physically impossible (see the module docstring).
+
+    Speeds are judged against the last plausible sample, so a spike is one or a few samples
+    flagged, while a jump of tracking to a new place (re-localisation) is flagged only until
+    a hand at :data:`MAX_SPEED` could have got there. The judging starts from the longest
+    run of samples that agree with each other — motion, not glitches — forwards and back.
+    """
+    far = valid & ~(np.abs(p) <= MAX_RADIUS).all(axis=1)
+    idx = np.flatnonzero(valid & ~far)
+    if len(idx) < 2:
+        return far
+    t, p = t[idx], p[idx]  # plausible-so-far samples, coordinates within ±MAX_RADIUS: no overflow
+    fine = np.linalg.norm(np.diff(p, axis=0), axis=1) <= MAX_SPEED * np.diff(t) + SLACK
+    if fine.all():
+        return far
+    edges = np.flatnonzero(np.diff(np.concatenate([[0], fine.astype(np.int8), [0]])))
+    runs = edges.reshape(-1, 2)  # [start, end) of runs of agreeing pairs
+    anchor = int(runs[np.argmax(runs[:, 1] - runs[:, 0]), 0]) if len(runs) else 0
+    bad = np.zeros(len(idx), dtype=bool)
+    tl, pl = t.tolist(), p.tolist()
+    for order in (range(anchor + 1, len(idx)), range(anchor - 1, -1, -1)):
+        last = anchor
+        for k in order:
+            d = sum((a - b) ** 2 for a, b in zip(pl[k], pl[last])) ** 0.5
+            if d <= MAX_SPEED * abs(tl[k] - tl[last]) + SLACK:
+                last = k
+            else:
+                bad[k] = True
+    far[idx[bad]] = True
+    return far
+
+
+def drop_impossible(t, p, q, valid, source: str, linenos, track: str, columns):
+    """``(valid, p, q)`` with the :func:`impossible` samples marked lost (values NaN), and a
+    warning naming the first one's file, line and column (``columns``: of px, py, pz)."""
+    bad = impossible(t, p, valid)
+    if not bad.any():
+        return valid, p, q
+    rows = np.flatnonzero(bad)
+    i = int(rows[0])
+    far = np.abs(p[i]) > MAX_RADIUS
+    if far.any():
+        j = int(np.argmax(np.abs(p[i])))
+        why = f"{p[i, j]:g} m is beyond any tracked space (±{MAX_RADIUS:g} m)"
+    else:
+        k = np.flatnonzero(valid & ~bad)
+        k = k[k < i][-1] if (k < i).any() else k[k > i][0]
+        j = int(np.argmax(np.abs(p[i] - p[k])))
+        speed = np.linalg.norm(p[i] - p[k]) / abs(t[i] - t[k])
+        why = f"a jump of {np.linalg.norm(p[i] - p[k]):.3g} m at {speed:.3g} m/s from line {int(linenos[k])}, " \
+              f"faster than any hand ({MAX_SPEED:g} m/s)"
+    lines = ", ".join(str(int(linenos[r])) for r in rows[:SHOWN]) + (", …" if len(rows) > SHOWN else "")
+    warnings.warn(f"{where(source, int(linenos[i]), columns[j])}: track {track}: {why}; {len(rows)} impossible "
+                  f"sample{'s' * (len(rows) != 1)} (line{'s' * (len(rows) != 1)} {lines}) treated as lost tracking",
+                  stacklevel=2)
+    valid = valid & ~bad
+    p, q = p.copy(), q.copy()
+    p[bad] = np.nan
+    q[bad] = np.nan
+    return valid, p, q
 
 
 def check_samples(name: str, t: np.ndarray, p: np.ndarray, q: np.ndarray, valid: np.ndarray, source: str) -> None:

@@ -42,6 +42,12 @@ from doodle.input.smoothing import StreamingSmoother, laplacian_kernel, savgol_k
 from doodle.core.tokens import CODES, NAMES, R_BASE, STILL, T_BASE, Token, direction_index, direction_indices, signs_of
 
 
+# The largest value of each parameter: far beyond any calibration, and small enough that its
+# squares stay finite and its kernels (seconds × rate) a sane length.
+LIMITS = {"eps": 1e3, "theta": 1e3, "alpha_s": 10.0, "smooth_s": 1.0, "savgol_window_s": 10.0, "max_gap": 3600.0,
+          "pause_s": 10.0, "significance": 1e3, "min_extent_s": 10.0, "window": 100, "level_cap": 90.0}
+
+
 @dataclass(frozen=True)
 class SegmenterParams:
     eps: float = 0.05  # m/s: a sample is still when ‖(v, θω)‖ ≤ eps
@@ -61,11 +67,10 @@ class SegmenterParams:
     def __post_init__(self) -> None:
         if self.smoothing not in ("laplacian", "savgol"):
             raise DoodleError(f"smoothing must be 'laplacian' or 'savgol', not {self.smoothing!r}")
-        for field in ("eps", "theta", "alpha_s", "smooth_s", "savgol_window_s", "max_gap", "pause_s",
-                      "significance", "min_extent_s", "window", "level_cap"):
+        for field, most in LIMITS.items():
             value = getattr(self, field)
-            if not (np.isfinite(value) and value >= 0):
-                raise DoodleError(f"segmenter parameter {field} must be a finite number ≥ 0, not {value!r}")
+            if not (np.isfinite(value) and 0 <= value <= most):
+                raise DoodleError(f"segmenter parameter {field} must be a number from 0 to {most:g}, not {value!r}")
 
     def alpha(self, rate: float) -> int:
         """α in samples for a device rate: ``round(alpha_s · rate)``, at least 1."""

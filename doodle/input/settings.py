@@ -31,12 +31,15 @@ def read_calibration(path, params: SegmenterParams = SegmenterParams()) -> tuple
     try:
         data = tomllib.loads(Path(path).read_text(encoding="utf-8"))
     except OSError as e:
-        raise DoodleError(f"{path}: cannot read calibration: {e.strerror}") from None
+        raise DoodleError(f"{path}: cannot read calibration: {e.strerror or e}") from None
     except (tomllib.TOMLDecodeError, UnicodeDecodeError) as e:
         raise DoodleError(f"{path}: not valid TOML: {e}") from None
     unknown = set(data) - {"segmenter", "mount"}
     if unknown:
         raise DoodleError(f"{path}: unknown section [{sorted(unknown)[0]}] (known: segmenter, mount)")
+    for section in ("segmenter", "mount"):
+        if not isinstance(data.get(section, {}), dict):
+            raise DoodleError(f"{path}: [{section}] must be a table")
     seg = data.get("segmenter", {})
     changes = {}
     for key, value in seg.items():
@@ -52,7 +55,8 @@ def read_calibration(path, params: SegmenterParams = SegmenterParams()) -> tuple
         raise DoodleError(f"{path}: {e}") from None
     mounts = {}
     for name, value in data.get("mount", {}).items():
-        ok = isinstance(value, list) and len(value) == 4 and all(isinstance(x, (int, float)) for x in value)
+        ok = isinstance(value, list) and len(value) == 4 and all(
+            isinstance(x, (int, float)) and not isinstance(x, bool) and abs(x) <= 2.0 for x in value)
         norm = math.sqrt(sum(float(x) ** 2 for x in value)) if ok else 0.0
         if not ok or abs(norm - 1.0) > 0.01:
             raise DoodleError(f"{path}: mount.{name}: expected a unit quaternion [x, y, z, w], got {value!r}")

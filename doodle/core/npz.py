@@ -1,0 +1,94 @@
+"""Reading ``.npz`` files a user hands us (effort models, shape files, height fields): every
+array read eagerly, never a pickle, and every way a file can be broken said as what it is.
+
+``np.load`` is the wrong tool for untrusted files: given bytes that are not a zip archive it
+falls back to unpickling, so random bytes come back as advice to pass ``allow_pickle`` — the
+wrong diagnosis — and an array header may announce any size, which ``np.load`` allocates
+before finding the data missing. Here the archive must be a zip of ``.npy`` members, each
+member's header is checked against the bytes that are really there before the array is
+read, and any failure is a :class:`DoodleError` ``LABEL: not a valid .npz archive (…)``.
+"""
+
+from __future__ import annotations
+
+import io
+import zipfile
+import zlib
+from pathlib import Path
+
+import numpy as np
+
+from doodle.core.errors import DoodleError
+
+#: The largest archive member read (uncompressed bytes): far above any model, shape file or
+#: height field, far below what would exhaust the memory of a laptop (a zip bomb).
+MAX_MEMBER_BYTES = 1 << 30
+
+# what reading a broken zip or npy member raises (zlib, zipfile, numpy's header parser)
+_BROKEN = (ValueError, TypeError, OverflowError, KeyError, EOFError, OSError, RuntimeError, NotImplementedError,
+           zipfile.BadZipFile, zlib.error, SyntaxError, IndexError)
+
+
+def _header(buf: io.BytesIO) -> tuple[tuple, bool, np.dtype]:
+    """``(shape, fortran_order, dtype)`` of the ``.npy`` whose bytes ``buf`` holds."""
+    version = np.lib.format.read_magic(buf)
+    if version == (1, 0):
+        return np.lib.format.read_array_header_1_0(buf)
+    if version == (2, 0):
+        return np.lib.format.read_array_header_2_0(buf)
+    raise ValueError(f"unsupported .npy format version {version[0]}.{version[1]}")
+
+
+def _array(data: bytes, name: str) -> np.ndarray:
+    """The array of one member's bytes, its announced size checked before anything is allocated."""
+    buf = io.BytesIO(data)
+    shape, fortran, dtype = _header(buf)
+    if dtype.hasobject:
+        raise ValueError(f"array {name!r} holds Python objects, which this program never loads")
+    count = 1
+    for n in shape:
+        count *= int(n)
+    have = len(data) - buf.tell()
+    if count * dtype.itemsize != have:
+        raise ValueError(f"array {name!r} announces {count * dtype.itemsize} bytes of data but holds {have}")
+    flat = np.frombuffer(data, dtype=dtype, count=count, offset=buf.tell()).copy()
+    return flat.reshape(shape[::-1]).T if fortran else flat.reshape(shape)
+
+
+def read_npz(path, label: str | None = None) -> dict[str, np.ndarray]:
+    """Every array of the ``.npz`` at ``path``, by name (member name without ``.npy``).
+
+    Raises DoodleError starting ``LABEL:`` (default: the path) when the file is missing, is
+    not a zip archive of ``.npy`` arrays, is truncated or corrupt, or holds object arrays.
+    """
+    path = Path(path)
+    label = str(path) if label is None else label
+    if path.is_dir():
+        raise DoodleError(f"{label}: is a directory, not a .npz file")
+    try:
+        handle = open(path, "rb")
+    except FileNotFoundError:
+        raise DoodleError(f"{label}: no such file") from None
+    except OSError as exc:
+        raise DoodleError(f"{label}: cannot read: {exc.strerror or exc}") from None
+    arrays = {}
+    try:
+        with handle, zipfile.ZipFile(handle) as archive:
+            for info in archive.infolist():
+                if info.is_dir():
+                    continue
+                if not info.filename.endswith(".npy"):
+                    raise ValueError(f"member {info.filename!r} is not a .npy array")
+                if info.file_size > MAX_MEMBER_BYTES:
+                    raise ValueError(f"member {info.filename!r} is {info.file_size} bytes uncompressed, "
+                                     f"more than the {MAX_MEMBER_BYTES} read")
+                name = info.filename[:-4]
+                arrays[name] = _array(archive.read(info), name)
+    except zipfile.BadZipFile as exc:
+        if not arrays and not zipfile.is_zipfile(path):
+            raise DoodleError(f"{label}: not a valid .npz archive (not a zip archive)") from None
+        raise DoodleError(f"{label}: not a valid .npz archive ({exc})") from None
+    except _BROKEN as exc:
+        reason = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+        raise DoodleError(f"{label}: not a valid .npz archive ({reason})") from None
+    return arrays

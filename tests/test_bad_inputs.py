@@ -1,0 +1,202 @@
+"""Broken and absurd inputs through the command line: one located line ``doodle: error: …``
+and exit 1 for what cannot be read, a located warning for what is repaired — never numpy's
+own diagnosis, a traceback or an overflow warning."""
+
+import json
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from doodle.app.cli.main import main
+from doodle.input.repair import MAX_RADIUS, MAX_SPEED, impossible
+
+ROOT = Path(__file__).resolve().parents[1]
+DEMO = ROOT / "examples" / "demo.doodle"
+
+
+def cli(capsys, *args):
+    """``(exit code, stdout, stderr lines)`` of ``doodle ARGS``, numpy warnings made errors."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", RuntimeWarning)
+        code = main([str(a) for a in args])
+    out, err = capsys.readouterr()
+    return code, out, err.splitlines()
+
+
+def refused(capsys, *args) -> str:
+    """The one error line of a command that must refuse its input."""
+    code, _, err = cli(capsys, *args)
+    assert code == 1 and len(err) == 1 and err[0].startswith("doodle: error: "), err
+    assert "Traceback" not in err[0] and "allow_pickle" not in err[0], err
+    return err[0]
+
+
+def edited(tmp_path, name, changes: dict) -> Path:
+    """The demo doodle with fields changed: ``{(line, column index): text}``."""
+    lines = DEMO.read_text().split("\n")
+    for (lineno, col), text in changes.items():
+        fields = lines[lineno - 1].split(",")
+        fields[col] = text
+        lines[lineno - 1] = ",".join(fields)
+    path = tmp_path / name
+    path.write_text("\n".join(lines))
+    return path
+
+
+# --------------------------------------------------------------------------- .npz and meshes
+
+
+def test_random_bytes_are_not_an_npz_archive(tmp_path, capsys):
+    junk = tmp_path / "junk.npz"
+    junk.write_bytes(np.random.default_rng(0).bytes(3000))
+    message = f"{junk}: not a valid .npz archive (not a zip archive)"
+    assert message in refused(capsys, "compile", DEMO, "-o", tmp_path / "o", "--effort-model", junk)
+    line = refused(capsys, "compile", DEMO, "-o", tmp_path / "o", "--terrain", f"heightfield:{junk}")
+    assert f"height field file '{junk}': not a valid .npz archive (not a zip archive)" in line
+    lib = tmp_path / "lib"
+    lib.mkdir()
+    (lib / "library.toml").write_text(f'[library]\nname = "mine"\n\n[[actions]]\nname = "Wave"\n'
+                                      f'expression = "T_X T_N_X"\nshape = "{junk}"\n')
+    line = refused(capsys, "recognize", "--library", lib, DEMO)
+    assert f"{junk} (shape of action 'Wave'): not a valid .npz archive (not a zip archive)" in line
+
+
+def test_object_arrays_are_refused_unloaded(tmp_path, capsys):
+    path = tmp_path / "objects.npz"
+    np.savez(path, heights=np.array([{"x": 1}], dtype=object))
+    line = refused(capsys, "compile", DEMO, "-o", tmp_path / "o", "--terrain", f"heightfield:{path}")
+    assert "objects.npz': not a valid .npz archive (array 'heights' holds Python objects, which this program never " \
+           "loads)" in line
+
+
+def test_a_junk_obj_mesh_names_its_line(tmp_path, capsys):
+    mesh = tmp_path / "ground.obj"
+    mesh.write_text("# ground\nv 0 0 0\nv 1 0 0 0 1\nv 0 0 1\nf 1 2 3\n")
+    line = refused(capsys, "compile", DEMO, "-o", tmp_path / "o", "--terrain", f"mesh:{mesh}")
+    assert f"{mesh}:3: a vertex is 'v x y z'" in line
+    mesh.write_text("v 0 0 0\nv 1 0 0\nv 0 0 1\nf 1 2 4\n")
+    assert f"{mesh}:4: face vertex 4 does not exist (3 vertices so far)" in refused(
+        capsys, "compile", DEMO, "-o", tmp_path / "o", "--terrain", f"mesh:{mesh}")
+    mesh.write_bytes(np.random.default_rng(1).bytes(2000))
+    assert f"{mesh}:" in refused(capsys, "compile", DEMO, "-o", tmp_path / "o", "--terrain", f"mesh:{mesh}")
+
+
+def test_effort_models_are_checked_field_by_field(tmp_path, capsys):
+    from laban.models import DEFAULT
+
+    with np.load(DEFAULT, allow_pickle=False) as z:
+        arrays = {k: z[k] for k in z.files}
+    cases = {"negative.npz": ("drive_variances", -0.5, "'drive_variances' holds -0.5"),
+             "nan.npz": ("nb_time_means", np.nan, "'nb_time_means' holds nan"),
+             "huge.npz": ("element_centre", 1e308, "'element_centre' holds 1e+308")}
+    for name, (key, value, said) in cases.items():
+        changed = dict(arrays)
+        changed[key] = changed[key].copy()
+        changed[key].flat[1] = value
+        np.savez(tmp_path / name, **changed)
+        line = refused(capsys, "compile", DEMO, "-o", tmp_path / "o", "--effort-model", tmp_path / name)
+        assert f"{tmp_path / name}: array {said}" in line, line
+    np.savez(tmp_path / "shape.npz", **dict(arrays, drive_start=arrays["drive_start"][:5]))
+    line = refused(capsys, "compile", DEMO, "-o", tmp_path / "o", "--effort-model", tmp_path / "shape.npz")
+    assert "shape.npz: array 'drive_start' must be numbers shaped 8×n, got float64 (5, 6)" in line
+    meta = json.loads(str(arrays["meta"]))
+    np.savez(tmp_path / "labels.npz", **dict(arrays, meta=np.array(json.dumps(dict(meta, drive_labels=["Punch"])))))
+    line = refused(capsys, "compile", DEMO, "-o", tmp_path / "o", "--effort-model", tmp_path / "labels.npz")
+    assert "labels.npz: 'drive_labels' must list each of Punch, Dab" in line
+
+
+# --------------------------------------------------------------------------- doodle files
+
+
+def test_a_nan_in_a_tracked_sample_names_line_and_column(tmp_path, capsys):
+    path = edited(tmp_path, "nan.doodle", {(300, 3): "nan"})
+    assert refused(capsys, "tokens", path) == (f"doodle: error: {path}:300: column c0.py: track c0: nan in a sample "
+                                               "marked tracked (every value of a tracked sample must be a finite number)")
+    path = edited(tmp_path, "norm.doodle", {(300, 5): "7"})
+    assert f"{path}:300: column c0.qx…c0.qw: track c0: quaternion norm" in refused(capsys, "tokens", path)
+
+
+def _recognised(capsys, path):
+    code, out, err = cli(capsys, "recognize", path)
+    assert code == 0
+    return out.splitlines()[1:], err
+
+
+@pytest.mark.parametrize("changes, column, said", [
+    ({(200, 2): "1e308"}, "c0.px", "1e+308 m is beyond any tracked space"),
+    ({(300, 3): "1000"}, "c0.py", "1000 m is beyond any tracked space"),
+    ({(300, 3): "5", (301, 3): "5.01"}, "c0.py", "a jump of 5 m at 428 m/s from line 299, faster than any hand"),
+    ({(8, 4): "-3"}, "c0.pz", "a jump of 3 m at 255 m/s from line 9, faster than any hand"),  # the first sample
+])
+def test_impossible_samples_are_lost_tracking(tmp_path, capsys, changes, column, said):
+    """A spike no hand could make is repaired as lost tracking, with a warning naming its
+    line and column, and the doodle reads as it did without it (it used to read as an
+    extra gesture, or an unknown one after six overflow warnings)."""
+    expected, _ = _recognised(capsys, DEMO)
+    path = edited(tmp_path, "spike.doodle", changes)
+    got, err = _recognised(capsys, path)
+    assert got == expected
+    first = min(changes)[0]
+    assert len(err) == 1 and err[0].startswith(f"doodle: warning: {path}:{first}: column {column}: track c0: {said}")
+    assert f"{len(changes)} impossible sample" in err[0] and "treated as lost tracking" in err[0]
+
+
+def test_what_is_impossible():
+    t = np.arange(200) / 90.0
+    p = np.column_stack([np.sin(t), np.cos(2 * t), 0.5 * t])  # a hand at under 2 m/s
+    valid = np.ones(len(t), bool)
+    assert not impossible(t, p, valid).any()
+    spiky = p.copy()
+    spiky[[0, 50, 51, 120]] += [[1, 0, 0], [0, 2, 0], [0, 2, 0], [0, 0, MAX_RADIUS * 2]]
+    assert list(np.flatnonzero(impossible(t, spiky, valid))) == [0, 50, 51, 120]
+    jumped = p.copy()
+    jumped[100:] += [1.0, 0, 0]  # tracking re-localised 1 m away: flagged until a hand could be there
+    assert list(np.flatnonzero(impossible(t, jumped, valid))) == list(range(100, 100 + int(90 / MAX_SPEED)))
+    lost = valid.copy()
+    lost[50:52] = False  # samples already lost are not judged
+    assert list(np.flatnonzero(impossible(t, spiky, lost))) == [0, 120]
+
+
+def test_real_recordings_have_no_impossible_samples(vive_files):
+    from doodle.input.csvimport import read_csv
+
+    for path in vive_files:
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")
+            doodle = read_csv(path, convention="unity")
+        assert all(tr.valid.all() for tr in doodle.tracks), path
+
+
+# --------------------------------------------------------------------------- CSV cut off
+
+
+def _csv(tmp_path, name, rows=None) -> Path:
+    """The demo as a CSV of the vive-gestures layout (openvr convention), optionally cut."""
+    lines = DEMO.read_text().splitlines()
+    data = [line.split(",") for line in lines[7:]]
+    text = ["t,c0_px,c0_py,c0_pz,c0_qx,c0_qy,c0_qz,c0_qw"] + [",".join([f[0]] + f[2:]) for f in data]
+    path = tmp_path / name
+    path.write_text("\n".join(text[:rows]) + "\n")
+    return path
+
+
+def test_a_csv_cut_off_mid_line_loads_its_whole_rows(tmp_path, capsys):
+    whole = _csv(tmp_path, "whole.csv")
+    cut = tmp_path / "cut.csv"
+    cut.write_bytes(whole.read_bytes()[:-30])  # the crash: the last row half written, no newline
+    code, out, err = cli(capsys, "info", "--convention", "openvr", cut)
+    rows = len(whole.read_text().splitlines()) - 1
+    assert code == 0 and f"{rows - 1} samples" in out
+    assert err == [f"doodle: warning: {cut}:{rows + 1}: last row is incomplete (cut off?); loaded {rows - 1} whole rows"]
+
+
+def test_a_malformed_csv_line_before_the_last_is_an_error(tmp_path, capsys):
+    whole = _csv(tmp_path, "whole.csv").read_text().splitlines()
+    broken = tmp_path / "broken.csv"
+    broken.write_text("\n".join(whole[:100] + ["1.0,2.0,3.0"] + whole[100:]))  # no final newline either
+    assert refused(capsys, "info", "--convention", "openvr", broken) == f"doodle: error: {broken}:101: 3 fields, expected 8"
+    broken.write_text("\n".join(whole[:-1] + [whole[-1] + ",1"]) + "\n")  # a last line ended, but wrong
+    assert refused(capsys, "info", "--convention", "openvr", broken) == \
+        f"doodle: error: {broken}:{len(whole)}: 9 fields, expected 8"
