@@ -57,10 +57,11 @@ def test_random_bytes_are_not_an_npz_archive(tmp_path, capsys):
     assert f"height field file '{junk}': not a valid .npz archive (not a zip archive)" in line
     lib = tmp_path / "lib"
     lib.mkdir()
-    (lib / "library.toml").write_text(f'[library]\nname = "mine"\n\n[[actions]]\nname = "Wave"\n'
-                                      f'expression = "T_X T_N_X"\nshape = "{junk}"\n')
+    (lib / "junk.npz").write_bytes(junk.read_bytes())  # a library's shapes lie inside it
+    (lib / "library.toml").write_text('[library]\nname = "mine"\n\n[[actions]]\nname = "Wave"\n'
+                                      'expression = "T_X T_N_X"\nshape = "junk.npz"\n')
     line = refused(capsys, "recognize", "--library", lib, DEMO)
-    assert f"{junk} (shape of action 'Wave'): not a valid .npz archive (not a zip archive)" in line
+    assert f"{lib / 'junk.npz'} (shape of action 'Wave'): not a valid .npz archive (not a zip archive)" in line
 
 
 def test_object_arrays_are_refused_unloaded(tmp_path, capsys):
