@@ -2,7 +2,7 @@
 
 import sys
 
-from bench import (animation_check, bvh_speed, contexter_speed, laban_effort, learning, matcher_speed, performers, real_gestures,
+from bench import (animation_check, bvh_speed, contexter_speed, laban_effort, learning, learning_protocol, matcher_speed, performers, real_gestures,
                    render_speed, replay_latency, segmenter_speed, stages_accuracy, stylize_signatures, stylize_speed,
                    terrain_speed)
 
@@ -30,6 +30,8 @@ def main() -> int:
     laban_effort.main()
     print()
     learning.main()
+    print()
+    learning_protocol.main()
     print()
     replay_latency.main()
     print()

@@ -298,6 +298,7 @@ class Live:
         self._done = {n: ([], []) for n in self.names}  # tokens and segments of finished chains, shifted
         self._rules = behaviours(compiled)
         self._pairs = two_handed(compiled)
+        self._laying = []  # two-handed segments still to be heard on their other tracks
         self._state = {n: frozenset(compiled.library.states) for n in self.names}
         self._contexter = None
         if len(self.names) > 1 and compiled.library.interactions:
@@ -328,6 +329,8 @@ class Live:
                 tokens[name] = old
             tokens[name] = tokens.get(name, []) + self._global(name, new)
             heard += self._heard(name, self.chains[name].feed(new, self.tape), new)
+        if self._laying:
+            heard += self._lay()
         return Step(tokens, heard, restarted)
 
     def close(self, flush: dict | None = None) -> Step:
@@ -337,6 +340,7 @@ class Live:
         for name in self.names:
             tokens[name], new = self._finish(name, True if flush is None else flush.get(name, True))
             heard += new
+        heard += self._lay(final=True)
         if self._contexter is not None:
             heard += self._interactions(self._contexter.close())
         view = {n: tuple(self._done[n]) for n in self.names}
@@ -383,13 +387,23 @@ class Live:
                                 refused=s.action, reason=rule.why(self._state[name]))
             if s.action in self._pairs and not isinstance(s, (Refused, InteractionSegment)):
                 out.append(Heard(name, _role(s, s.first, s.stop, 0)))  # one gesture, heard on every track
-                for role, other in enumerate(self._pairs[s.action], 1):
-                    if other in self.chains:
-                        known = self._done[other][0] + self._global(other, self.chains[other].tokens)
-                        laid = [o for o in overlay([], known, s, role) if isinstance(o, InteractionSegment)]
-                        out += [Heard(other, o) for o in laid]
+                self._laying += [(s, role, other) for role, other in enumerate(self._pairs[s.action], 1)
+                                 if other in self.chains]  # once the other track's tokens reach its end
                 continue
             out.append(Heard(name, s))
+        return out
+
+    def _lay(self, final: bool = False) -> list[Heard]:
+        """Two-handed segments heard on their other tracks once those tracks' tokens reach
+        their end (at the end of the stream, as far as they go)."""
+        out, waiting = [], []
+        for s, role, other in self._laying:
+            known = self._done[other][0] + self._global(other, self.chains[other].tokens)
+            if not final and (not known or known[-1].end < s.end):
+                waiting.append((s, role, other))
+                continue
+            out += [Heard(other, o) for o in overlay([], known, s, role) if isinstance(o, InteractionSegment)]
+        self._laying = waiting
         return out
 
     def _interactions(self, found) -> list[Heard]:
