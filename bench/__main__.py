@@ -2,7 +2,7 @@
 
 import sys
 
-from bench import (animation_check, bvh_speed, contexter_speed, laban_effort, learning, learning_protocol, matcher_speed, performers, real_gestures,
+from bench import (animation_check, bvh_speed, contexter_speed, laban_effort, learning_protocol, matcher_speed, performers, real_gestures,
                    render_speed, replay_latency, segmenter_speed, stages_accuracy, stylize_signatures, stylize_speed,
                    terrain_speed)
 
@@ -28,8 +28,6 @@ def main() -> int:
     stylize_signatures.main([])
     print()
     laban_effort.main()
-    print()
-    learning.main()
     print()
     learning_protocol.main()
     print()

@@ -4,14 +4,16 @@ The Segmenter's tokens quantise a path to 26 directions and pauses; two whole-bo
 of one person (a left and a right hook, an uppercut and a golf swing) often give token
 strings 5–10 edits apart between repetitions and as close to each other's expressions as to
 their own. A learned action therefore keeps the *shapes* of its examples as well: each
-example's path resampled to :data:`POINTS` points by arc length, as the unit directions of
-its :data:`POINTS` − 1 steps (in the room's frame — a performer faces the table, so left
-and right mean something). The shape distance of a performance to an action is the smallest
-DTW cost between its directions and an example's, per step (the mean squared difference of
-unit directions, 0 … 4). It is the representation of the nearest-neighbour baseline of
-the learning benchmark (Kristensson & Zhai's direction features resampled by arc length, compared with
-DTW); here it ranks the actions whose expressions the Matcher found: ``edits +``
-:data:`WEIGHT` ``× shape distance``.
+example's path resampled to :data:`POINTS` points by arc length with the controller's
+orientation there (:func:`sample`; a two-handed action's tracks resampled together, along
+their summed arc length). Its features per step (:func:`features`) are the unit direction
+of the step and the controller's forward and up axes (weighted by :data:`TURN`), in the
+room's frame — a performer faces the table, so left and right mean something, and how the
+hand is turned tells an uppercut from a hook. The shape distance of a performance to an
+action is the smallest DTW cost between its features and an example's, per step. It ranks
+the actions whose expressions the Matcher found: ``edits +`` :data:`WEIGHT` ``× shape
+distance``; an action is rejected past a distance derived from its examples
+(:func:`reject_distances`).
 
 DTW costs of one performance against every template are computed at once (one row
 recurrence vectorised over templates), about 0.2 ms for 33 templates of 31 steps.
