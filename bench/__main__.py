@@ -2,7 +2,7 @@
 
 import sys
 
-from bench import (animation_check, bvh_speed, contexter_speed, laban_effort, learning, matcher_speed, performers, real_gestures,
+from bench import (animation_check, bvh_speed, contexter_speed, laban_effort, learning_protocol, matcher_speed, performers, real_gestures,
                    render_speed, replay_latency, segmenter_speed, stages_accuracy, stylize_signatures, stylize_speed,
                    terrain_speed)
 
@@ -29,7 +29,7 @@ def main() -> int:
     print()
     laban_effort.main()
     print()
-    learning.main()
+    learning_protocol.main()
     print()
     replay_latency.main()
     print()

@@ -1,4 +1,9 @@
-"""Learning gestures (§4.2.5–4.2.6) on the real Vive recordings of ../shared/data/vive-gestures:
+"""(Superseded in ``make bench`` by :mod:`bench.learning_protocol`, which measures the
+product path — ``doodle learn`` and ``doodle recognize`` — with every constant held out;
+this older bench classifies isolated gestures by an argmin over all classes, not as the
+product does, and its constants were set on the same users.)
+
+Learning gestures (§4.2.5–4.2.6) on the real Vive recordings of ../shared/data/vive-gestures:
 learning time; isolated-gesture accuracy user-dependent (learn from ex_0..2, test ex_3, ex_4)
 and user-independent (learn from the other users' ex_0..2), with one controller (c0) and
 both; the DTW nearest-neighbour baseline in the same run (direction vectors of the paths

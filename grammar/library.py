@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -12,7 +12,7 @@ from grammar.automata import DFA, check_language, compile_expression, intersecti
 from grammar.constraints import parse_constraints
 from grammar.expr import parse
 from grammar.matcher import Automaton
-from grammar.shapes import ShapeSet, load_paths, shape_set
+from grammar.shapes import ShapeSet, load_shape, shape_set
 from library.manifest import ActionDef, Library
 
 
@@ -22,11 +22,24 @@ class Compiled:
     dfas: tuple[DFA, ...]
     roles: "Compiled | None" = None  # interaction-only actions, matched by the Contexter
     shapes: ShapeSet | None = None  # the learned actions' example shapes (grammar.shapes)
+    _tables: dict = field(default_factory=dict, repr=False)  # the Matcher's tables, built once per kind
 
-    def automaton(self, threshold: float = 2.0, direction_costs: bool = False, track: str | None = None) -> Automaton:
-        """The Matcher's tables; with ``track``, without the actions bound to other tracks."""
-        keep = [k for k, a in enumerate(self.library.actions) if track is None or a.track in (None, track)]
+    def automaton(self, threshold: float = 2.0, direction_costs: bool = False, track: str | None = None,
+                  present=None) -> Automaton | None:
+        """The Matcher's tables; with ``track``, without the actions bound to other tracks
+        (and, given the tracks ``present``, without two-handed actions missing one); None
+        when a track has no action of its own (it only partners two-handed actions)."""
+        key = (threshold, direction_costs, track, None if present is None else tuple(sorted(present)))
+        if key not in self._tables:
+            self._tables[key] = self._automaton(threshold, direction_costs, track, present)
+        return self._tables[key]
+
+    def _automaton(self, threshold, direction_costs, track, present) -> Automaton | None:
+        keep = [k for k, a in enumerate(self.library.actions) if (track is None or a.track in (None, track))
+                and (present is None or all(t in present for t in a.tracks))]
         if not keep:
+            if track is not None and any(track in a.tracks for a in self.library.actions):
+                return None
             raise DoodleError(f"{self.library.source}: no action may be recognised on track {track!r}")
         actions = [self.library.actions[k] for k in keep]
         return Automaton([a.name for a in actions], [self.dfas[k] for k in keep], threshold, direction_costs,
@@ -73,10 +86,18 @@ def compile_library(library: Library) -> Compiled:
                            library.roles, library.interactions, library.states)
     if not recognisable.actions:
         raise DoodleError(f"{library.source}: no action has an expression to recognise")
-    named = {a.name: load_paths(a.shape, a.name) for a in recognisable.actions if a.shape}
+    named = {}
+    for a in recognisable.actions:
+        if a.shape:
+            paths, quats = load_shape(a.shape, a.name)
+            if paths.shape[1] != max(1, len(a.tracks)):
+                raise DoodleError(f"{a.source}: action {a.name!r}: its shape file {a.shape} holds "
+                                  f"{paths.shape[1]} track(s), its 'tracks' name {max(1, len(a.tracks))}")
+            named[a.name] = (paths, quats)
     return Compiled(recognisable, tuple(compile_action(a) for a in recognisable.actions), compile_roles(library),
                     shape_set(named, {a.name: a.expression for a in recognisable.actions},
-                              {a.name: a.track for a in recognisable.actions}))
+                              {a.name: a.track for a in recognisable.actions},
+                              partners={a.name: a.tracks[1:] for a in recognisable.actions if a.tracks}))
 
 
 def _check_invertible(library: Library) -> None:

@@ -44,7 +44,7 @@ def track_automata(compiled: Compiled, tracks: list[str], threshold: float = 2.0
     if not compiled.bound:
         automaton = compiled.automaton(threshold, direction_costs)
         return {name: automaton for name in tracks}
-    return {name: compiled.automaton(threshold, direction_costs, name) for name in tracks}
+    return {name: compiled.automaton(threshold, direction_costs, name, present=tracks) for name in tracks}
 
 
 def recognize(doodle, compiled: Compiled, params: SegmenterParams = SegmenterParams(),
@@ -57,18 +57,86 @@ def recognize(doodle, compiled: Compiled, params: SegmenterParams = SegmenterPar
     automata = track_automata(compiled, list(tokens), threshold, direction_costs)
     result = {}
     for name, toks in tokens.items():
+        if automata[name] is None:  # a track that only partners two-handed actions
+            result[name] = (toks, unmatched(toks))
+            continue
         segments = match(toks, automata[name], name)
         if compiled.shapes is not None:  # learned actions re-decided by their examples' shapes
             track = doodle.track(name)
-            segments = refine(segments, toks, track.p, track.valid, compiled.shapes, name)
+            others = {o: (doodle.track(o).p, doodle.track(o).q, doodle.track(o).valid) for o in tokens if o != name}
+            segments = refine(segments, toks, track.p, track.valid, compiled.shapes, name, track.q, others)
         result[name] = (toks, segments)
     return decide(doodle, compiled, result, threshold, interactions)
+
+
+def unmatched(tokens: list[Token]) -> list[Segment]:
+    """The segments of a track no action is recognised on: one unknown run."""
+    if not tokens:
+        return []
+    return [Segment("unknown", 0, len(tokens), tokens[0].start, tokens[-1].end, False, None)]
+
+
+def two_handed(compiled: Compiled) -> dict:
+    """Two-handed learned actions: name → the other tracks performing them."""
+    shapes = compiled.shapes
+    if shapes is None:
+        return {}
+    return {n: others for n, others in zip(shapes.names, shapes.partners) if others}
+
+
+def with_pairs(compiled: Compiled, result: dict) -> dict:
+    """A two-handed action, recognised on its first track, read as one gesture on every
+    track performing it: an :class:`InteractionSegment` named after it (``interaction`` is
+    the action's name, ``role`` the track's place in its ``tracks``) over the same samples
+    on each — replacing, on the other tracks, the unknown runs it covers and the actions
+    it covers for at least half of their tokens."""
+    pairs = two_handed(compiled)
+    if not pairs:
+        return result
+    out = {name: list(segs) for name, (_, segs) in result.items()}
+    found = []
+    for name, (_, segs) in result.items():
+        for x, s in enumerate(segs):
+            if s.action in pairs and not isinstance(s, (InteractionSegment, Refused)):
+                out[name][x] = _role(s, s.first, s.stop, 0)
+                found.append(s)
+    for s in found:
+        for role, other in enumerate(pairs[s.action], 1):
+            if other in result:
+                out[other] = overlay(out[other], result[other][0], s, role)
+    return {name: (toks, out[name]) for name, (toks, _) in result.items()}
+
+
+def _role(s: Segment, first: int, stop: int, role: int) -> InteractionSegment:
+    return InteractionSegment(s.action, first, stop, s.start, s.end, s.exact, s.distance, interaction=s.action,
+                              role=role)
+
+
+def overlay(segments: list[Segment], tokens: list[Token], s: Segment, role: int) -> list[Segment]:
+    """A track's ``segments`` with the two-handed segment ``s`` (samples of another track,
+    the same moments) laid over its ``tokens`` as role ``role``."""
+    starts = np.array([k.start for k in tokens], dtype=np.int64)
+    ends = np.array([k.end for k in tokens], dtype=np.int64)
+    first = int(np.searchsorted(ends, s.start, side="right"))
+    stop = int(np.searchsorted(starts, s.end, side="left"))
+    if stop <= first:
+        return segments
+    kept = []
+    for o in segments:
+        if o.action == "unknown" and not isinstance(o, Refused):
+            for a, b in ((o.first, min(o.stop, first)), (max(o.first, stop), o.stop)):
+                if a < b:
+                    kept.append(Segment("unknown", a, b, tokens[a].start, tokens[b - 1].end, False, None))
+        elif 2 * (min(o.stop, stop) - max(o.first, first)) < (o.stop - o.first):
+            kept.append(o)
+    return sorted(kept + [_role(s, first, stop, role)], key=lambda o: (o.first, o.stop))
 
 
 def decide(doodle, compiled: Compiled, result: dict, threshold: float = 2.0, interactions: bool = True) -> dict:
     """Per-track ``(tokens, segments)`` of the Matcher and Refiner, with the library's
     interactions recognised across tracks (§6.2.1) where the doodle has several, and then
     behaviour states (§6.3.3): actions whose pre-conditions fail become :class:`Refused`."""
+    result = with_pairs(compiled, result)
     if interactions and len(result) > 1 and compiled.library.interactions:
         resolved = with_interactions(doodle, compiled, result, threshold)
         result = {name: (toks, resolved[name]) for name, (toks, _) in result.items()}
@@ -151,14 +219,23 @@ class _Chain:
     def __init__(self, live: "Live", name: str, offset: int):
         self.name, self.offset = name, offset
         self.segmenter = Segmenter(live.rate, live.params, name, live.source)
-        self.matcher = Matcher(live.automata[name], name)
+        auto = live.automata[name]
+        self.matcher = Matcher(auto, name) if auto is not None else None  # None: it only partners two-handed actions
         shapes = live.compiled.shapes
-        self.refiner = Refiner(shapes, np.zeros((0, 3)), np.zeros(0, dtype=bool), name) if shapes is not None else None
+        others = {o: (None, None, None) for o in live.names if o != name}  # filled as samples come
+        self.refiner = (Refiner(shapes, np.zeros((0, 3)), np.zeros(0, dtype=bool), name, np.zeros((0, 4)), others)
+                        if shapes is not None and auto is not None else None)
         self.tokens: list[Token] = []
         self.segments: list[Segment] = []
 
     def feed(self, tokens: list[Token], tape: _Tape, close: bool = False) -> list[Segment]:
         segments = []
+        if self.matcher is None:
+            self.tokens += tokens
+            if close:
+                segments = unmatched(self.tokens)
+            self.segments += segments
+            return segments
         for token in tokens:
             self.tokens.append(token)
             segments += self._refined(self.matcher.push(token), tape, token)
@@ -171,7 +248,11 @@ class _Chain:
         if self.refiner is None:
             return segments
         view = tape.track(self.name)
-        self.refiner.p, self.refiner.valid = view.p[self.offset:], view.valid[self.offset:]
+        k = self.offset
+        self.refiner.p, self.refiner.valid, self.refiner.q = view.p[k:], view.valid[k:], view.q[k:]
+        for other in self.refiner.others:
+            o = tape.track(other)
+            self.refiner.others[other] = (o.p[k:], o.q[k:], o.valid[k:])
         if token is not None:
             self.refiner.tokens.append(token)
         out = self.refiner.push(segments)
@@ -216,6 +297,8 @@ class Live:
         self.chains = {n: _Chain(self, n, 0) for n in self.names}
         self._done = {n: ([], []) for n in self.names}  # tokens and segments of finished chains, shifted
         self._rules = behaviours(compiled)
+        self._pairs = two_handed(compiled)
+        self._laying = []  # two-handed segments still to be heard on their other tracks
         self._state = {n: frozenset(compiled.library.states) for n in self.names}
         self._contexter = None
         if len(self.names) > 1 and compiled.library.interactions:
@@ -246,6 +329,8 @@ class Live:
                 tokens[name] = old
             tokens[name] = tokens.get(name, []) + self._global(name, new)
             heard += self._heard(name, self.chains[name].feed(new, self.tape), new)
+        if self._laying:
+            heard += self._lay()
         return Step(tokens, heard, restarted)
 
     def close(self, flush: dict | None = None) -> Step:
@@ -255,6 +340,7 @@ class Live:
         for name in self.names:
             tokens[name], new = self._finish(name, True if flush is None else flush.get(name, True))
             heard += new
+        heard += self._lay(final=True)
         if self._contexter is not None:
             heard += self._interactions(self._contexter.close())
         view = {n: tuple(self._done[n]) for n in self.names}
@@ -299,7 +385,25 @@ class Live:
                 else:
                     s = Refused("unknown", s.first, s.stop, s.start, s.end, False, None,
                                 refused=s.action, reason=rule.why(self._state[name]))
+            if s.action in self._pairs and not isinstance(s, (Refused, InteractionSegment)):
+                out.append(Heard(name, _role(s, s.first, s.stop, 0)))  # one gesture, heard on every track
+                self._laying += [(s, role, other) for role, other in enumerate(self._pairs[s.action], 1)
+                                 if other in self.chains]  # once the other track's tokens reach its end
+                continue
             out.append(Heard(name, s))
+        return out
+
+    def _lay(self, final: bool = False) -> list[Heard]:
+        """Two-handed segments heard on their other tracks once those tracks' tokens reach
+        their end (at the end of the stream, as far as they go)."""
+        out, waiting = [], []
+        for s, role, other in self._laying:
+            known = self._done[other][0] + self._global(other, self.chains[other].tokens)
+            if not final and (not known or known[-1].end < s.end):
+                waiting.append((s, role, other))
+                continue
+            out += [Heard(other, o) for o in overlay([], known, s, role) if isinstance(o, InteractionSegment)]
+        self._laying = waiting
         return out
 
     def _interactions(self, found) -> list[Heard]:

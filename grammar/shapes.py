@@ -4,14 +4,16 @@ The Segmenter's tokens quantise a path to 26 directions and pauses; two whole-bo
 of one person (a left and a right hook, an uppercut and a golf swing) often give token
 strings 5–10 edits apart between repetitions and as close to each other's expressions as to
 their own. A learned action therefore keeps the *shapes* of its examples as well: each
-example's path resampled to :data:`POINTS` points by arc length, as the unit directions of
-its :data:`POINTS` − 1 steps (in the room's frame — a performer faces the table, so left
-and right mean something). The shape distance of a performance to an action is the smallest
-DTW cost between its directions and an example's, per step (the mean squared difference of
-unit directions, 0 … 4). It is the representation of the nearest-neighbour baseline of
-the learning benchmark (Kristensson & Zhai's direction features resampled by arc length, compared with
-DTW); here it ranks the actions whose expressions the Matcher found: ``edits +``
-:data:`WEIGHT` ``× shape distance``.
+example's path resampled to :data:`POINTS` points by arc length with the controller's
+orientation there (:func:`sample`; a two-handed action's tracks resampled together, along
+their summed arc length). Its features per step (:func:`features`) are the unit direction
+of the step and the controller's forward and up axes (weighted by :data:`TURN`), in the
+room's frame — a performer faces the table, so left and right mean something, and how the
+hand is turned tells an uppercut from a hook. The shape distance of a performance to an
+action is the smallest DTW cost between its features and an example's, per step. It ranks
+the actions whose expressions the Matcher found: ``edits +`` :data:`WEIGHT` ``× shape
+distance``; an action is rejected past a distance derived from its examples
+(:func:`reject_distances`).
 
 DTW costs of one performance against every template are computed at once (one row
 recurrence vectorised over templates), about 0.2 ms for 33 templates of 31 steps.
@@ -74,14 +76,76 @@ def dtw_costs(x: np.ndarray, templates: np.ndarray) -> np.ndarray:
     return out[0] if single else out
 
 
+# --- poses of one or several tracks: resampled together, as features ---------------------
+
+TURN = 1.0  # weight of the controller's orientation axes beside the path's directions (both unit vectors)
+
+
+def sample(poses, points: int = POINTS) -> tuple[np.ndarray, np.ndarray]:
+    """Tracks performed together — ``[(p (n, 3), q (n, 4)), …]``, the same samples —
+    resampled to ``points`` points equally spaced along their *summed* arc length (one
+    time axis for both hands: the one that moves drives it, the other is read at the same
+    moments): paths (T, points, 3) from their first points, orientations (T, points, 4)."""
+    poses = [(np.asarray(p, dtype=float), np.asarray(q, dtype=float)) for p, q in poses]
+    s = np.zeros(len(poses[0][0]))
+    for p, _ in poses:
+        s[1:] += np.cumsum(np.linalg.norm(np.diff(p, axis=0), axis=1))
+    paths, quats = [], []
+    for p, q in poses:
+        q = np.where(np.isfinite(q).all(axis=1, keepdims=True), q, [0.0, 0.0, 0.0, 1.0])
+        q = q / np.maximum(np.linalg.norm(q, axis=1, keepdims=True), 1e-12)
+        q = q * np.where(np.cumsum(np.concatenate([[False], (q[1:] * q[:-1]).sum(1) < 0])) % 2 == 1, -1.0, 1.0)[:, None]
+        if s[-1] <= 0:
+            paths.append(np.zeros((points, 3)))
+            quats.append(np.repeat(q[:1], points, axis=0))
+            continue
+        u = np.linspace(0.0, s[-1], points)
+        paths.append(np.column_stack([np.interp(u, s, p[:, k] - p[0, k]) for k in range(3)]))
+        r = np.column_stack([np.interp(u, s, q[:, k]) for k in range(4)])
+        quats.append(r / np.maximum(np.linalg.norm(r, axis=1, keepdims=True), 1e-12))
+    return np.array(paths), np.array(quats)
+
+
+def features(paths: np.ndarray, quats: np.ndarray | None, turn: float | None = None) -> np.ndarray:
+    """Per step of resampled tracks (T, n, 3) — and their orientations (T, n, 4) — the unit
+    direction of each track's step and, weighted by ``turn`` (default :data:`TURN`), its
+    controller's forward and up axes in the room at the step (the grip: how the hand is
+    turned as it moves): (n − 1, T·3) or (n − 1, T·9)."""
+    from doodle.core import quat
+
+    turn = TURN if turn is None else turn
+    cols = []
+    for k, path in enumerate(paths):
+        cols.append(directions(path))
+        if quats is not None and turn > 0:
+            q = quats[k]
+            mid = q[1:] + q[:-1] * np.where((q[1:] * q[:-1]).sum(1, keepdims=True) < 0, -1.0, 1.0)
+            mid = mid / np.maximum(np.linalg.norm(mid, axis=1, keepdims=True), 1e-12)
+            cols += [turn * quat.rotate(mid, np.array([0.0, 0.0, 1.0])), turn * quat.rotate(mid, np.array([0.0, 1.0, 0.0]))]
+    return np.hstack(cols)
+
+
 # --- a library's shapes, and segments refined by them ------------------------------------
 
 REACH = 3  # tokens a refined segment may extend past the Matcher's at either end
 TRIM = 3  # tokens it may give up at either end
 UNKNOWN_REACH = 8  # tokens it may take from a neighbouring unknown run
 SPOT_TOKENS, SPOT_MAX = 4, 40  # unknown runs of this many tokens are searched for a learned action…
-SPOT = 0.5  # …found when its shape distance is under this part of the action's rejection distance
-MIN_REJECT = 0.4  # shape distance under which a learned action is never rejected
+SPOT = 1.0  # …found when its shape distance is under this part of the action's rejection distance
+
+
+@dataclass(frozen=True, eq=False)
+class Group:
+    """Actions whose examples read the same tracks the same way: one DTW batch.
+
+    ``tracks`` are the tracks read, in order, the first being the one the action is
+    recognised on (one track: that track or, for actions not bound to one, whichever is
+    refined — stored as ``(None,)``); ``oriented`` whether orientations were kept."""
+
+    tracks: tuple
+    oriented: bool
+    templates: np.ndarray  # (K, POINTS - 1, D) features of every example of the group's actions
+    owner: np.ndarray  # (K,) index into ShapeSet.names, sorted
 
 
 @dataclass(frozen=True, eq=False)
@@ -89,40 +153,86 @@ class ShapeSet:
     """The learned actions that carry shapes, ready to rank segments."""
 
     names: tuple[str, ...]
-    templates: np.ndarray  # (K, POINTS - 1, 3) directions of every example of every action
-    owner: np.ndarray  # (K,) index into names, sorted
+    groups: tuple  # of Group
     reject: np.ndarray  # (len(names),) shape distance above which a segment is not that action
     automaton: object  # grammar.matcher.Automaton of the names' expressions (edit distances, capped)
-    tracks: tuple = ()  # per name, the track it is bound to (None: any)
+    tracks: tuple = ()  # per name, the track it is recognised on (None: any)
+    partners: tuple = ()  # per name, the other tracks it is performed with (two-handed actions), or ()
 
-    def allowed(self, track: str | None) -> np.ndarray:
-        """Which actions may be recognised on ``track``."""
+    def allowed(self, track: str | None, present=None) -> np.ndarray:
+        """Which actions may be recognised on ``track`` (two-handed ones: when every track
+        they read is among ``present``)."""
         bound = self.tracks or (None,) * len(self.names)
-        return np.array([b is None or track is None or b == track for b in bound])
+        partners = self.partners or ((),) * len(self.names)
+        return np.array([(b is None or track is None or b == track)
+                         and (not others or present is None or all(o in present for o in others))
+                         for b, others in zip(bound, partners)])
+
+    def distances_of(self, windows: list, read) -> np.ndarray:
+        """Per window and action, the shape distance (inf where the action was not scored).
+        ``read(group, window)`` gives a window's (paths, quats) for a group's tracks, or None."""
+        out = np.full((len(windows), len(self.names)), np.inf)
+        for g in self.groups:
+            feats, rows = [], []
+            for w, window in enumerate(windows):
+                pq = read(g, window)
+                if pq is not None:
+                    feats.append(features(pq[0], pq[1] if g.oriented else None))
+                    rows.append(w)
+            if rows:
+                out[np.array(rows)[:, None], np.unique(g.owner)[None, :]] = _nearest(g, np.array(feats))
+        return out
 
     def distances(self, x: np.ndarray) -> np.ndarray:
-        """Per action, the shape distance of directions x (n, 3), or of each of a batch (B, n, 3)."""
-        if x.ndim == 3 and len(x) * len(self.templates) > CHUNK:  # bounded memory: in chunks of windows
-            step = max(1, CHUNK // len(self.templates))
-            return np.concatenate([self.distances(x[k:k + step]) for k in range(0, len(x), step)])
-        costs = dtw_costs(x, self.templates)
-        return np.minimum.reduceat(costs, np.searchsorted(self.owner, np.arange(len(self.names))), axis=-1)
+        """Per action, the distance of features x (n, D) — or of a batch (B, n, D) — to its
+        examples, for a set of one group (inf for actions of other shapes)."""
+        single = x.ndim == 2
+        xb = x[None] if single else x
+        out = np.full((len(xb), len(self.names)), np.inf)
+        for g in self.groups:
+            if g.templates.shape[-1] == xb.shape[-1]:
+                out[:, np.unique(g.owner)] = _nearest(g, xb)
+        return out[0] if single else out
 
 
-FORMAT = 1
+def _nearest(group: Group, x: np.ndarray) -> np.ndarray:
+    """(B, actions of the group): the smallest DTW cost of each of x to each action's examples."""
+    if len(x) * len(group.templates) > CHUNK:  # bounded memory: in chunks
+        step = max(1, CHUNK // len(group.templates))
+        return np.concatenate([_nearest(group, x[k:k + step]) for k in range(0, len(x), step)])
+    costs = dtw_costs(x, group.templates)
+    starts = np.searchsorted(group.owner, np.unique(group.owner))
+    return np.minimum.reduceat(costs, starts, axis=-1)
 
 
-def save_paths(path, paths: np.ndarray) -> None:
-    """Write example paths (k, n, 3) to ``path`` (.npz, no pickles), atomically."""
+FORMAT = 2
+STRADDLES = 4  # synthetic negatives per example: joined to this many others, spread over the library
+
+
+def save_paths(path, paths: np.ndarray, quats: np.ndarray | None = None) -> None:
+    """Write example shapes to ``path`` (.npz, no pickles), atomically: paths (k, n, 3) of
+    one track (format 1), or paths (k, T, n, 3) with orientations (k, T, n, 4) of T tracks
+    read together (format 2)."""
     from doodle.core.files import atomic_path
 
     with atomic_path(path) as tmp:
         with open(tmp, "wb") as f:
-            np.savez(f, paths=np.asarray(paths, dtype=float), format=np.array(FORMAT))
+            if quats is None:
+                np.savez(f, paths=np.asarray(paths, dtype=float), format=np.array(1))
+            else:
+                np.savez(f, paths=np.asarray(paths, dtype=float), quats=np.asarray(quats, dtype=float),
+                         format=np.array(2))
 
 
 def load_paths(path, action: str = "") -> np.ndarray:
-    """Example paths (k, n, 3) from a shape file; DoodleError naming the file and action."""
+    """Example paths (k, n, 3) of the first track of a shape file; DoodleError naming the file and action."""
+    paths, _ = load_shape(path, action)
+    return paths[:, 0]
+
+
+def load_shape(path, action: str = "") -> tuple[np.ndarray, np.ndarray | None]:
+    """Example paths (k, T, n, 3) and orientations (k, T, n, 4) or None (format 1, paths
+    alone) from a shape file; DoodleError naming the file and action."""
     from doodle.core.errors import DoodleError
     from doodle.core.npz import read_npz
 
@@ -130,28 +240,40 @@ def load_paths(path, action: str = "") -> np.ndarray:
     arrays = read_npz(path, where)
     if "paths" not in arrays:
         raise DoodleError(f"{where}: no 'paths' array in it")
+    version = 1
     if "format" in arrays:
-        version = arrays["format"]
-        if version.shape != () or version.dtype.kind not in "iu" or int(version) != FORMAT:
-            raise DoodleError(f"{where}: shape format {version.tolist()!r} is not supported (this version reads {FORMAT})")
+        v = arrays["format"]
+        if v.shape != () or v.dtype.kind not in "iu" or int(v) not in (1, 2):
+            raise DoodleError(f"{where}: shape format {v.tolist()!r} is not supported (this version reads 1 and 2)")
+        version = int(v)
     paths = arrays["paths"]
-    if paths.dtype.kind != "f" or paths.ndim != 3 or paths.shape[0] < 1 or paths.shape[1:] != (POINTS, 3):
-        raise DoodleError(f"{where}: 'paths' must be a float array (examples, points = {POINTS}, 3), got "
-                          f"{paths.dtype} {paths.shape}")
-    if not np.isfinite(paths).all():
-        raise DoodleError(f"{where}: 'paths' holds NaN or infinite values")
+    quats = arrays.get("quats") if version == 2 else None
+    if paths.dtype.kind == "f" and paths.ndim == 3:
+        paths = paths[:, None]
+    if paths.dtype.kind != "f" or paths.ndim != 4 or paths.shape[0] < 1 or paths.shape[2:] != (POINTS, 3):
+        raise DoodleError(f"{where}: 'paths' must be a float array (examples, points = {POINTS}, 3) or (examples, "
+                          f"tracks, points = {POINTS}, 3), got {paths.dtype} {paths.shape}")
+    if quats is not None and (quats.dtype.kind != "f" or quats.shape != paths.shape[:3] + (4,)):
+        raise DoodleError(f"{where}: 'quats' must be a float array {paths.shape[:3] + (4,)}, got "
+                          f"{quats.dtype} {quats.shape}")
+    if not np.isfinite(paths).all() or (quats is not None and not np.isfinite(quats).all()):
+        raise DoodleError(f"{where}: 'paths' or 'quats' holds NaN or infinite values")
     if np.abs(paths).max() > MAX_METRES:
         raise DoodleError(f"{where}: 'paths' reaches {np.abs(paths).max():.3g} m from its start; "
                           f"a hand's path stays within {MAX_METRES:g} m")
-    return paths.astype(float)
+    if quats is not None and np.abs(quats).max() > 2.0:
+        raise DoodleError(f"{where}: 'quats' are not unit quaternions")
+    return paths.astype(float), (None if quats is None else quats.astype(float))
 
 
 def shape_set(named: dict, expressions: dict, tracks: dict | None = None, cap: float = 20.0,
-              automaton=None) -> ShapeSet | None:
-    """A :class:`ShapeSet` from ``{action: example paths (k, POINTS, 3)}``, the actions'
-    expressions and the tracks they are bound to (``{action: track}``, default none); None
-    when no action has shapes. Edit distances count up to ``cap``; ``automaton``, when
-    given, is a ready one of the same expressions in the same order (no pause protection)."""
+              automaton=None, partners: dict | None = None) -> ShapeSet | None:
+    """A :class:`ShapeSet` from ``{action: example shapes}`` — paths (k, n, 3), or
+    ``(paths (k, T, n, 3), quats (k, T, n, 4) | None)`` — the actions' expressions, the
+    tracks they are recognised on (``{action: track}``, default none) and, for actions read
+    on several tracks, the others (``{action: (track, …)}``); None when no action has
+    shapes. Edit distances count up to ``cap``; ``automaton``, when given, is a ready one
+    of the same expressions in the same order (no pause protection)."""
     if not named:
         return None
     from grammar.automata import compile_expression
@@ -159,27 +281,79 @@ def shape_set(named: dict, expressions: dict, tracks: dict | None = None, cap: f
     from grammar.matcher import Automaton
 
     names = tuple(named)
-    dirs = [np.array([directions(p) for p in named[n]]) for n in names]
-    owner = np.concatenate([np.full(len(d), k) for k, d in enumerate(dirs)])
+    tracks, partners = tracks or {}, partners or {}
+    keyed = {}
+    for k, n in enumerate(names):
+        shape = named[n]
+        paths, quats = (shape, None) if isinstance(shape, np.ndarray) else shape
+        paths = np.asarray(paths, dtype=float)
+        if paths.ndim == 3:
+            paths = paths[:, None]
+        others = tuple(partners.get(n, ()))
+        key = ((tracks.get(n),) + others if others else (None,), quats is not None, paths.shape[1])
+        feats = np.array([features(paths[j], None if quats is None else quats[j]) for j in range(len(paths))])
+        keyed.setdefault(key, []).append((k, feats, paths, quats))
+    groups, reject = [], np.zeros(len(names))
+    for (read, oriented, _), members in keyed.items():
+        templates = np.concatenate([f for _, f, _, _ in members])
+        owner = np.concatenate([np.full(len(f), k) for k, f, _, _ in members])
+        group = Group(read, oriented, templates, owner)
+        groups.append(group)
+        reject[[k for k, *_ in members]] = reject_distances(group, members)
     auto = automaton or Automaton(list(names), [compile_expression(parse(expressions[n], n)) for n in names],
                                   threshold=cap, protect_still=False)
-    return ShapeSet(names, np.concatenate(dirs), owner, np.array([reject_distance(d) for d in dirs]), auto,
-                    tuple((tracks or {}).get(n) for n in names))
+    return ShapeSet(names, tuple(groups), reject, auto, tuple(tracks.get(n) for n in names),
+                    tuple(tuple(partners.get(n, ())) for n in names))
 
 
-def reject_distance(templates: np.ndarray) -> float:
-    """How far from its examples a performance of an action may be: twice the largest
-    distance of an example to the others (leave one out), at least :data:`MIN_REJECT`."""
-    if len(templates) < 2:
-        return MIN_REJECT
-    loo = [dtw_costs(templates[k], np.delete(templates, k, axis=0)).min() for k in range(len(templates))]
-    return max(MIN_REJECT, 2.0 * float(max(loo)))
+def reject_distances(group: Group, members: list) -> np.ndarray:
+    """How far from its examples a performance of each action of a group may be — derived
+    from the examples, nothing tuned: midway between how far the action's own examples are
+    from each other (each from the others, leave one out: the largest) and how near it
+    comes to *straddles* — the second half of one example joined to the first half of
+    another, of any action: what a window across two performances looks like in a stream
+    (the synthetic negatives of Jackknife, Taranta et al. 2017, spliced from the
+    examples). Where the straddles come nearer than the own examples, the own examples'
+    spread stands (a performance like the examples is never rejected)."""
+    pieces = []  # (paths (T, n, 3), quats or None) of every example
+    for _, _, paths, quats in members:
+        pieces += [(paths[j], None if quats is None else quats[j]) for j in range(len(paths))]
+    half = POINTS // 2
+    n = len(pieces)  # each example followed by STRADDLES others spread over the library
+    pairs = sorted({(i, (i + 1 + m * max(1, (n - 1) // STRADDLES)) % n) for i in range(n)
+                    for m in range(min(STRADDLES, n - 1))})
+    straddles = []
+    for i, j in pairs:
+        (pa, qa), (pb, qb) = pieces[i], pieces[j]
+        if True:
+            poses = []
+            for t in range(len(pa)):
+                join = pa[t, -1] - pa[t, half]  # b's first half moved on from where a's second half ends
+                p = np.concatenate([pa[t, half:] - pa[t, half], pb[t, :half + 1] - pb[t, 0] + join])
+                q = (np.concatenate([qa[t, half:], qb[t, :half + 1]]) if qa is not None
+                     else np.tile([0.0, 0.0, 0.0, 1.0], (len(p), 1)))
+                poses.append((p, q))
+            paths, quats = sample(poses)
+            straddles.append(features(paths, quats if qa is not None else None))
+    near = _nearest(group, np.array(straddles)).min(axis=0) if straddles else None
+    out = []
+    for slot, (k, feats, _, _) in enumerate(members):
+        own = group.templates[group.owner == k]
+        if len(own) < 2:
+            spread = 0.0
+        else:
+            spread = max(float(dtw_costs(own[j], np.delete(own, j, axis=0)).min()) for j in range(len(own)))
+        if near is None:
+            out.append(2.0 * spread)
+            continue
+        out.append(max(spread, 0.5 * (spread + float(near[slot]))))
+    return np.array(out)
 
 
 def refine(segments: list, tokens: list, p: np.ndarray, valid: np.ndarray, shapes: ShapeSet,
-           track: str | None = None) -> list:
+           track: str | None = None, q: np.ndarray | None = None, others: dict | None = None) -> list:
     """Batch form of :class:`Refiner`: every segment of a track re-decided."""
-    refiner = Refiner(shapes, p, valid, track)
+    refiner = Refiner(shapes, p, valid, track, q, others)
     refiner.tokens.extend(tokens)
     return refiner.push(segments) + refiner.close()
 
@@ -204,14 +378,18 @@ class Refiner:
     (less any tokens taken). The batch form (:func:`refine`) is this run to the end, so
     streaming equals batch.
 
-    ``tokens`` is the track's token list (append as the Segmenter gives them); ``p`` and
-    ``valid`` the track's samples, at least as far as the tokens go; ``track`` its name
-    (actions bound to other tracks are not considered).
+    ``tokens`` is the track's token list (append as the Segmenter gives them); ``p``, ``q``
+    and ``valid`` the track's samples, at least as far as the tokens go; ``track`` its name
+    (actions bound to other tracks are not considered); ``others`` the other tracks'
+    samples, ``{name: (p, q, valid)}`` over the same sample times, read by two-handed
+    actions recognised on this track (a window's shape is both hands' over its samples).
     """
 
-    def __init__(self, shapes: ShapeSet, p: np.ndarray, valid: np.ndarray, track: str | None = None):
-        self.shapes, self.p, self.valid = shapes, p, valid
-        self._allowed = shapes.allowed(track)
+    def __init__(self, shapes: ShapeSet, p: np.ndarray, valid: np.ndarray, track: str | None = None,
+                 q: np.ndarray | None = None, others: dict | None = None):
+        self.shapes, self.p, self.valid, self.q = shapes, p, valid, q
+        self.track, self.others = track, dict(others or {})
+        self._allowed = shapes.allowed(track, set(self.others) | {track})
         self.tokens: list = []
         self._waiting: list = []
         self._done = 0  # tokens before this are decided
@@ -284,7 +462,7 @@ class Refiner:
         names = [k.name for k in self.tokens]
         auto = self.shapes.automaton
         last = min(known, max(hi for _, hi in ends))
-        windows, edits, dirs = [], [], []
+        windows, edits = [], []
         for f in starts:
             if names[f] == "T_STILL":
                 continue
@@ -294,20 +472,34 @@ class Refiner:
                 if not any(lo <= e <= hi for lo, hi in ends) or names[e - 1] == "T_STILL":
                     continue
                 a, b = self.tokens[f].start, self.tokens[e - 1].end
-                path = self.p[a:b][self.valid[a:b]]
-                if len(path) >= 3:
+                if int(self.valid[a:b].sum()) >= 3:
                     windows.append((f, e))
                     edits.append(auto.accept_costs(d))
-                    dirs.append(directions(resample(path)))
         if not windows:
             return None
-        ds = self.shapes.distances(np.array(dirs))  # (windows, actions)
+        ds = self.shapes.distances_of(windows, self._read)  # (windows, actions)
         edits = np.array(edits)
-        score = np.where(self._allowed, edits + WEIGHT * ds, np.inf)
+        score = np.where(self._allowed & np.isfinite(ds), edits + WEIGHT * ds, np.inf)
         w, k = np.unravel_index(int(np.argmin(score)), score.shape)
         if not np.isfinite(score[w, k]) or ds[w, k] > strict * self.shapes.reject[k]:
             return None
         return windows[w][0], windows[w][1], int(k), float(edits[w, k])
+
+    def _read(self, group: Group, window) -> tuple | None:
+        """A window's samples of the group's tracks, resampled together (None: a track is missing)."""
+        a, b = self.tokens[window[0]].start, self.tokens[window[1] - 1].end
+        own = (self.p, self.q, self.valid)
+        tracks = [own if name is None or name == self.track else self.others.get(name) for name in group.tracks]
+        if any(t is None or t[0] is None or len(t[0]) < b for t in tracks):
+            return None
+        keep = np.ones(b - a, dtype=bool)
+        for _, _, v in tracks:
+            keep &= np.asarray(v[a:b], dtype=bool)
+        if keep.sum() < 3:
+            return None
+        poses = [(p[a:b][keep], (q[a:b][keep] if q is not None else np.tile([0.0, 0.0, 0.0, 1.0], (int(keep.sum()), 1))))
+                 for p, q, _ in tracks]
+        return sample(poses)
 
     def _emit(self, action: str, f: int, e: int, exact: bool, distance) -> list:
         from grammar.matcher import UNKNOWN, Segment

@@ -21,6 +21,8 @@ A library is a folder holding ``library.toml``::
     tolerance = 6                    # optional: token edits a performance may differ by (default: the Matcher's 2)
     shape = "shapes/wave.npz"        # optional: the examples' paths (learned actions; grammar.shapes)
     track = "c0"                     # optional: the only track it is recognised on
+    tracks = ["c0", "c1"]            # optional: tracks performing it together (a two-handed action,
+                                     #   one gesture: recognised on the first, its shape read on all)
     requires = ["standing"]          # optional behaviour (§6.3.3): state variables that must be true,
     forbids = ["fallen"]             #   … that must be false before it,
     sets = ["fallen"]                #   … made true and
@@ -66,7 +68,7 @@ RESERVED = {"unknown"}
 FLAGS = ("cyclic", "in_place", "jumping")
 BEHAVIOUR = ("requires", "forbids", "sets", "clears")  # §6.3.3 pre- and post-conditions
 ACTION_KEYS = {"name", "expression", "note", "flags_note", "clips", "stages", "cycle_length", "tolerance",
-               "interaction_only", "shape", "track", *BEHAVIOUR, *FLAGS}
+               "interaction_only", "shape", "track", "tracks", *BEHAVIOUR, *FLAGS}
 ROLES = ("pelvis", "chest", "head", "left_foot", "right_foot", "left_hand", "right_hand")
 
 
@@ -87,6 +89,7 @@ class ActionDef:
     interaction_only: bool = False  # its expression is a role of an interaction, never matched alone
     shape: str | None = None  # absolute path of the .npz of its examples' paths (grammar.shapes)
     track: str | None = None  # recognised on this track only (None: on any)
+    tracks: tuple[str, ...] = ()  # a two-handed action: the tracks performing it together, ``track`` first
     requires: tuple[str, ...] = ()  # behaviour (§6.3.3): state variables true before,
     forbids: tuple[str, ...] = ()  # false before,
     sets: tuple[str, ...] = ()  # made true and
@@ -255,6 +258,14 @@ def _action(entry, i: int, path: Path) -> ActionDef:
     track = entry.get("track")
     if track is not None and (not isinstance(track, str) or not track.strip()):
         raise DoodleError(f"{where}: field 'track' must be a track name such as \"c0\"")
+    together = entry.get("tracks", [])
+    if not isinstance(together, list) or (together and (
+            len(together) < 2 or not all(isinstance(t, str) and t.strip() for t in together)
+            or len(set(together)) != len(together) or (track is not None and track != together[0]))):
+        raise DoodleError(f"{where}: field 'tracks' must list two or more distinct track names, the first being "
+                          "'track' when that is given, e.g. [\"c0\", \"c1\"]")
+    if together:
+        track = together[0]
     behaviour = {key: _names(entry.get(key, []), f"{where}: field {key!r}") for key in BEHAVIOUR}
     for a, b in (("requires", "forbids"), ("sets", "clears")):
         both = set(behaviour[a]) & set(behaviour[b])
@@ -272,7 +283,7 @@ def _action(entry, i: int, path: Path) -> ActionDef:
                      tolerance=float(tolerance) if tolerance is not None else None,
                      interaction_only=interaction_only,
                      shape=str(within(path.parent, shape, f"{where}: field 'shape'")) if shape is not None else None,
-                     track=track,
+                     track=track, tracks=tuple(together),
                      **behaviour, **flags)
 
 
@@ -355,6 +366,8 @@ def format_library(library: Library, folder) -> str:
             lines.append(f"shape = {_toml_string(os.path.relpath(a.shape, folder))}")
         if a.track is not None:
             lines.append(f"track = {_toml_string(a.track)}")
+        if a.tracks:
+            lines.append(f"tracks = [{', '.join(_toml_string(t) for t in a.tracks)}]")
         for key in BEHAVIOUR:
             if getattr(a, key):
                 lines.append(f"{key} = [{', '.join(_toml_string(v) for v in getattr(a, key))}]")

@@ -128,7 +128,10 @@ def test_doodle_learn_then_recognize_a_held_out_performance(tmp_path, capsys):
     capsys.readouterr()
 
 
-def test_two_tracks_learn_an_expression_pair(tmp_path, capsys):
+def test_two_tracks_learn_one_two_handed_action(tmp_path, capsys):
+    """``--tracks c0,c1`` learns one action performed with both hands; ``recognize --json``
+    reports a held-out performance as that one action on both tracks, its name also the
+    ``interaction`` (one decision over both tracks, not two halves that must both succeed)."""
     from library.manifest import load_library
 
     files = _vive("golf_swing")
@@ -136,19 +139,22 @@ def test_two_tracks_learn_an_expression_pair(tmp_path, capsys):
     assert main(["learn", "Golf", *files[:3], "--library", str(lib), "--convention", "unity",
                  "--tracks", "c0,c1"]) == 0
     library = load_library(lib)
-    assert [(a.name, a.track) for a in library.actions] == [("Golf.c0", "c0"), ("Golf.c1", "c1")]  # bound
-    assert library.interactions[0].name == "Golf" and library.interactions[0].actions == ("Golf.c0", "Golf.c1")
-    assert all(a.tolerance >= 2 for a in library.actions)
+    assert [(a.name, a.track, a.tracks) for a in library.actions] == [("Golf", "c0", ("c0", "c1"))]
+    assert not library.interactions and library.actions[0].tolerance >= 2
     out = capsys.readouterr().out
-    assert "overlap" in out
+    assert "Golf (c0+c1" in out and "overlap" in out
     import json
 
     assert main(["recognize", "--library", str(lib), "--no-builtin", "--convention", "unity", "--json",
-                 files[4]]) == 0  # a held-out performance, both controllers: the pair, as one interaction
+                 files[4]]) == 0
     segs = json.loads(capsys.readouterr().out)["segments"]
-    assert {(s["track"], s["action"], s["interaction"]) for s in segs if s["interaction"]} == \
-        {("c0", "Golf.c0", "Golf"), ("c1", "Golf.c1", "Golf")}
-    assert all(s["action"] in ("unknown", f"Golf.{s['track']}") for s in segs)  # never the other hand's
+    named = {(s["track"], s["action"], s["interaction"], s["role"]) for s in segs if s["action"] != "unknown"}
+    assert named == {("c0", "Golf", "Golf", 0), ("c1", "Golf", "Golf", 1)}
+    golf = {s["track"]: (s["start"], s["end"]) for s in segs if s["action"] == "Golf"}
+    assert golf["c0"] == golf["c1"]  # the same moments on both hands
+    assert main(["recognize", "--library", str(lib), "--no-builtin", "--convention", "unity", "--json",
+                 "--tracks", "c0", files[4]]) == 0  # one hand alone is not the two-handed gesture
+    assert all(s["action"] == "unknown" for s in json.loads(capsys.readouterr().out)["segments"])
 
 
 def test_learn_command_bad_input(tmp_path, capsys):

@@ -1,9 +1,10 @@
 """``doodle learn``: teach the program a new action from a few performed examples (§4.2.5).
 
 The action is added to a user library folder (created if missing) with the learned
-expression; with two tracks (``--tracks c0,c1``) one expression is learned per track, stored
-as actions ``NAME.c0`` and ``NAME.c1`` joined by an ``[[interactions]]`` entry ``NAME`` — an
-expression pair performed together. The overlap check against the library then says which
+expression and its examples' shapes (paths and controller orientations); with two tracks
+(``--tracks c0,c1``) it is one two-handed action ``NAME`` (``tracks = ["c0", "c1"]``): its
+expression is the first track's, its shapes both hands' resampled together, so it is
+recognised as one gesture — one decision over both tracks. The overlap check against the library then says which
 actions would collide and on which token string, so the person can keep, rename or re-record.
 
 The library changes whole or not at all (:mod:`library.folder`): its new version — shapes,
@@ -101,15 +102,72 @@ def check_name(text: str) -> str:
     return name
 
 
+def learn_action(existing, name: str, doodles: list, tracks: list[str], params, folder: Path, source: str = ""):
+    """What ``doodle learn`` adds to the library ``existing`` (in ``folder``): the action
+    ``name`` learned from ``doodles`` (one performance each) on ``tracks`` — one track, or
+    several performing one two-handed gesture (recognised on the first, its shape read on
+    all). Returns the new library, its shape files to write (``{file name: (paths,
+    quats)}``), what was learned per track and the seconds learning took."""
+    import numpy as np
+
+    from doodle.core.files import safe_file_name
+    from grammar.learn import learn
+    from grammar.shapes import sample
+    from library.manifest import ActionDef, Library, manifest_path
+
+    start = time.perf_counter()
+    learned = []
+    for track in tracks:
+        examples = [(d.track(track).t, d.track(track).p, d.track(track).q) for d in doodles]
+        try:
+            learned.append(learn(examples, doodles[0].rate, params))
+        except DoodleError as e:
+            raise DoodleError(f"track {track}: {e}") from None
+    shapes = []
+    for d in doodles:  # the tracks' samples where every one of them is tracked, resampled together
+        keep = np.logical_and.reduce([d.track(t).valid for t in tracks])
+        shapes.append(sample([(d.track(t).p[keep], d.track(t).q[keep]) for t in tracks]))
+    took = time.perf_counter() - start
+    learned[0] = _not_empty(learned[0])
+    replaced = {name} | {f"{name}.{t}" for t in tracks}  # and the halves of a pair learned before
+    kept = tuple(a for a in existing.actions if a.name not in replaced)
+    taken = {Path(a.shape).stem for a in kept if a.shape}
+    file = safe_file_name(name, taken) + ".npz"
+    home = Path(folder).resolve()
+    lead = learned[0]
+    action = ActionDef(name, lead.expression, False, True, False, note=f"learned from {source}" if source else "",
+                       source=str(manifest_path(folder)), tolerance=lead.tolerance, shape=str(home / "shapes" / file),
+                       track=tracks[0] if len(tracks) > 1 else None, tracks=tuple(tracks) if len(tracks) > 1 else ())
+    interactions = tuple(i for i in existing.interactions if i.name != name)
+    library = Library(existing.name, kept + (action,), existing.source, existing.roles, interactions, existing.states)
+    paths = np.array([p for p, _ in shapes])
+    quats = np.array([q for _, q in shapes])
+    return library, {file: (paths, quats)}, learned, took
+
+
+def _not_empty(learned):
+    """Examples so different (several people's, say) that no token is in all of them give an
+    expression of optional parts only, which would also match no motion at all: it then
+    needs one of the tokens the examples end with after it (what every example does)."""
+    from dataclasses import replace
+
+    from grammar.automata import compile_expression
+    from grammar.expr import parse
+
+    if not compile_expression(parse(learned.expression)).accept[0]:
+        return learned
+    last = sorted({s[-1] for s in learned.strings if s})
+    end = last[0] if len(last) == 1 else "(" + " | ".join(last) + ")"
+    return replace(learned, expression=f"{learned.expression} {end}")
+
+
 def cmd_learn(args) -> int:
     from doodle.app.cli.options import load_input, segmenter_params
-    from doodle.core.files import atomic_write, safe_file_name
-    from grammar.learn import learn
+    from doodle.core.files import atomic_write
     from grammar.library import compile_library, overlaps
     from grammar.shapes import save_paths
     from library.folder import check_library_folder, updating
-    from library.manifest import ActionDef, Interaction, Library, builtin, combine, format_library, load_library, \
-        manifest_path
+    from library.manifest import Library, builtin, combine, format_library, load_library, manifest_path
 
     name = check_name(args.name)
     folder = check_library_folder(Path(args.library))
@@ -134,43 +192,23 @@ def cmd_learn(args) -> int:
         missing = [t for t in tracks if t not in d.names]
         if missing:
             raise DoodleError(f"{path}: no track {missing[0]!r} (tracks: {', '.join(d.names)})")
-    names = [name] if len(tracks) == 1 else [f"{name}.{t}" for t in tracks]
-    clashing(names + [name])
-    start = time.perf_counter()
-    learned = []
-    for track in tracks:
-        examples = [(d.track(track).t, d.track(track).p, d.track(track).q) for d in doodles]
-        try:
-            learned.append(learn(examples, doodles[0].rate, params))
-        except DoodleError as e:
-            raise DoodleError(f"track {track}: {e}") from None
-    took = time.perf_counter() - start
-    source = ", ".join(Path(p).name for p in args.examples)
-    kept = tuple(a for a in existing.actions if a.name not in names)
-    taken = {Path(a.shape).stem for a in kept if a.shape}
-    files = []
-    for n in names:
-        files.append(safe_file_name(n, taken) + ".npz")
-        taken.add(files[-1][:-4])
-    home = folder.resolve()
-    new = [ActionDef(n, lrn.expression, False, True, False, note=f"learned from {source}",
-                     source=str(manifest_path(folder)), tolerance=lrn.tolerance, shape=str(home / "shapes" / file),
-                     track=track if len(tracks) > 1 else None)
-           for n, lrn, file, track in zip(names, learned, files, tracks)]
-    interactions = tuple(i for i in existing.interactions if i.name != name)
-    if len(names) > 1:
-        interactions += (Interaction(name, tuple(names)),)
-    library = Library(existing.name, kept + tuple(new), existing.source, existing.roles, interactions,
-                      existing.states)
+    clashing([name] + ([f"{name}.{t}" for t in tracks] if len(tracks) > 1 else []))
+    library, new, learned, took = learn_action(existing, name, doodles, tracks, params, folder,
+                                               ", ".join(Path(p).name for p in args.examples))
     with updating(folder) as stage:  # the library changes whole once all is written, or not at all
         (stage / "shapes").mkdir(exist_ok=True)
-        for file, lrn in zip(files, learned):
-            save_paths(stage / "shapes" / file, lrn.paths)
-        atomic_write(manifest_path(stage), [format_library(library, home)])
+        for file, (paths, quats) in new.items():
+            save_paths(stage / "shapes" / file, paths, quats)
+        atomic_write(manifest_path(stage), [format_library(library, folder.resolve())])
         compiled = compile_library(combine(None if args.no_builtin else builtin(), load_library(stage)))
-    for n, lrn, track in zip(names, learned, tracks):
-        print(f"{n} ({track}, learned in {took * 1000 / len(tracks):.0f} ms, tolerance {lrn.tolerance:g} edits): "
-              f"{lrn.expression}")
+    names = [name]
+    together = "+".join(tracks)
+    for track, lrn in zip(tracks, learned):
+        if track == tracks[0]:
+            print(f"{name} ({together}, learned in {took * 1000:.0f} ms, tolerance {lrn.tolerance:g} edits): "
+                  f"{lrn.expression}")
+        else:  # the other hand's tokens: shown, its shape read with the first's
+            print(f"  {track} alone would be: {lrn.expression}")
         for k, s in enumerate(lrn.strings):
             label = "average" if k == len(args.examples) else Path(args.examples[k]).name
             print(f"    {label:<24} {' '.join(s)}")

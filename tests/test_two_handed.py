@@ -1,0 +1,117 @@
+"""Two-handed learned actions (``doodle learn --tracks c0,c1``): one gesture read over both
+tracks — ``recognize --json`` names it on both, replay hears it on both and ends where the
+batch does — on generated two-hand performances."""
+
+import json
+
+import numpy as np
+import pytest
+
+from doodle.app.cli.main import main
+from doodle.input.fileformat import write_doodle
+from doodle.synth.strokes import stroke, synth_doodle
+
+GESTURES = {  # per hand, the strokes of a two-handed gesture
+    "Clap": (["T_X", "T_N_X"], ["T_N_X", "T_X"]),
+    "Lift": (["T_Y", "T_Z", "T_N_Y"], ["T_Y", "T_Z", "T_N_Y"]),
+}
+
+
+def _take(name, seed):
+    right, left = GESTURES[name]
+
+    def strokes(words):
+        return [stroke("T_STILL", 0.4)] + [stroke(w, 0.35) for w in words] + [stroke("T_STILL", 0.4)]
+
+    return synth_doodle({"c0": strokes(right), "c1": strokes(left)}, seed=seed,
+                        start_p={"c0": (0.2, 1.0, 0.0), "c1": (-0.2, 1.0, 0.0)})
+
+
+@pytest.fixture(scope="module")
+def library(tmp_path_factory):
+    root = tmp_path_factory.mktemp("two")
+    lib = root / "lib"
+    for name in GESTURES:
+        files = []
+        for seed in (1, 2, 3):
+            path = root / f"{name}_{seed}.doodle"
+            write_doodle(path, _take(name, seed))
+            files.append(str(path))
+        assert main(["learn", name, *files, "--library", str(lib), "--tracks", "c0,c1", "--no-builtin"]) == 0
+    held = {}
+    for name in GESTURES:
+        held[name] = root / f"{name}_held.doodle"
+        write_doodle(held[name], _take(name, 11))
+    return lib, held
+
+
+@pytest.mark.parametrize("name", list(GESTURES))
+def test_recognize_names_the_two_handed_action_on_both_tracks(library, name, capsys):
+    lib, held = library
+    capsys.readouterr()
+    assert main(["recognize", "--library", str(lib), "--no-builtin", "--json", str(held[name])]) == 0
+    segs = json.loads(capsys.readouterr().out)["segments"]
+    named = [s for s in segs if s["action"] != "unknown"]
+    assert {(s["track"], s["action"], s["interaction"], s["role"]) for s in named} == \
+        {("c0", name, name, 0), ("c1", name, name, 1)}
+    (a,), (b,) = ([s for s in named if s["track"] == t] for t in ("c0", "c1"))
+    assert (a["start"], a["end"]) == (b["start"], b["end"])
+    for track in ("c0", "c1"):  # each track's segments still tile it in order
+        mine = [s for s in segs if s["track"] == track]
+        assert all(x["samples"][1] <= y["samples"][0] for x, y in zip(mine, mine[1:]))
+
+
+def test_replay_hears_the_pair_on_both_tracks_and_ends_as_recognize(library):
+    from doodle.app.replay import replay
+    from doodle.input.loader import load
+    from grammar.recognizer import load_actions, recognize
+
+    lib, held = library
+    compiled = load_actions(lib, False)
+    doodle = load(held["Clap"])
+    done = replay(doodle, compiled)
+    heard = {(r.track, r.action, r.interaction) for r in done.found}
+    assert heard == {("c0", "Clap", "Clap"), ("c1", "Clap", "Clap")}
+    batch = recognize(doodle, compiled)
+    for track, (_, segs) in batch.items():
+        assert [(s.action, s.start, s.end) for s in done.result[track][1]] == [(s.action, s.start, s.end) for s in segs]
+
+
+def test_manifest_tracks_field(tmp_path):
+    from doodle.core.errors import DoodleError
+    from library.manifest import format_library, load_library
+
+    (tmp_path / "library.toml").write_text('[library]\nname = "x"\n\n[[actions]]\nname = "A"\n'
+                                           'expression = "T_X"\ntracks = ["c0", "c1"]\n')
+    lib = load_library(tmp_path)
+    assert lib.actions[0].track == "c0" and lib.actions[0].tracks == ("c0", "c1")
+    (tmp_path / "again").mkdir()
+    (tmp_path / "again" / "library.toml").write_text(format_library(lib, tmp_path))
+    assert load_library(tmp_path / "again").actions[0].tracks == ("c0", "c1")
+    (tmp_path / "library.toml").write_text('[library]\nname = "x"\n\n[[actions]]\nname = "A"\n'
+                                           'expression = "T_X"\ntrack = "c1"\ntracks = ["c0", "c1"]\n')
+    with pytest.raises(DoodleError, match="'tracks'"):
+        load_library(tmp_path)
+
+
+def test_derived_rejection_separates_own_examples_from_straddles():
+    """The rejection distance is at least the examples' own spread, and a window across two
+    performances (the end of one, the start of another) is farther than it."""
+    from grammar import shapes
+
+    rng = np.random.default_rng(0)
+    t = np.linspace(0, 1, 60)
+    named = {}
+    for k, (name, f) in enumerate({"arc": lambda t: np.column_stack([np.sin(np.pi * t), 1 - np.cos(np.pi * t), 0 * t]),
+                                   "zig": lambda t: np.column_stack([t, np.abs(((4 * t) % 2) - 1), 0 * t])}.items()):
+        takes = []
+        for _ in range(3):
+            p = f(t) + rng.normal(0, 0.005, (len(t), 3))
+            takes.append(shapes.sample([(p, np.tile([0.0, 0.0, 0.0, 1.0], (len(t), 1)))]))
+        named[name] = (np.array([a for a, _ in takes]), np.array([b for _, b in takes]))
+    ss = shapes.shape_set(named, {"arc": "T_X", "zig": "T_Y"})
+    assert (ss.reject > 0).all()
+    for k, name in enumerate(ss.names):
+        paths, quats = named[name]
+        own = np.array([shapes.features(paths[j], quats[j]) for j in range(3)])
+        assert ss.distances(own)[:, k].max() <= ss.reject[k] + 1e-9
