@@ -162,9 +162,9 @@ def dba(examples: list[tuple[np.ndarray, np.ndarray, np.ndarray]], points: int =
         # every example's aligned samples in one list, example after example (the sums
         # below add them in that order)
         paths = _dtw_paths(avg, stacked)
-        i = np.concatenate([i for i, _ in paths])
-        which = np.concatenate([np.full(len(j), k) for k, (_, j) in enumerate(paths)])
-        j = np.concatenate([j for _, j in paths])
+        i = np.concatenate([rows for rows, _ in paths])
+        which = np.concatenate([np.full(len(cols), k) for k, (_, cols) in enumerate(paths)])
+        j = np.concatenate([cols for _, cols in paths])
         sums, qsum, counts = np.zeros_like(avg), np.zeros_like(avg_q), np.zeros(points)
         np.add.at(sums, i, stacked[which, j])
         qq = stacked_q[which, j]
