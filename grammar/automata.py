@@ -103,8 +103,11 @@ class _NFA:
         return self.closure({t for s in states for c, t in self.moves[s] if c == code})
 
 
-def compile_expression(node) -> DFA:
-    """Minimal DFA of the compacted language of an expression tree."""
+def compile_expression(node, minimal: bool = True) -> DFA:
+    """Minimal DFA of the compacted language of an expression tree (with ``minimal``
+    False, the subset construction's DFA of the same language, before minimisation: it
+    answers the same questions about the language — acceptance, edit distances — and is
+    quicker to build)."""
     nfa = _NFA()
     start, final = nfa.build(node)
     first = (nfa.closure({start}), -1)
@@ -114,20 +117,22 @@ def compile_expression(node) -> DFA:
     while todo:
         states, last = todo.popleft()
         row = np.full(N_CODES, -1, dtype=np.int64)
-        for code in SYMBOLS:
+        targets: dict[int, set] = {}  # token code → the NFA states it moves to
+        for s in states:
+            for code, t in nfa.moves[s]:
+                targets.setdefault(code, set()).add(t)
+        for code in sorted(targets):  # the only codes with a move (in code order)
             if code == last:
                 continue
-            nxt = nfa.move(states, code)
-            if not nxt:
-                continue
-            key = (nxt, code)
+            key = (nfa.closure(targets[code]), code)
             if key not in index:
                 index[key] = len(index)
                 todo.append(key)
             row[code] = index[key]
         rows.append(row)
         accept.append(final in states)
-    return minimise(DFA(np.array(rows), np.array(accept, dtype=bool)))
+    dfa = DFA(np.array(rows), np.array(accept, dtype=bool))
+    return minimise(dfa) if minimal else dfa
 
 
 def minimise(dfa: DFA) -> DFA:

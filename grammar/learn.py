@@ -36,8 +36,12 @@ import numpy as np
 from doodle.core import quat
 from doodle.core.errors import DoodleError
 from doodle.core.model import Track
+from doodle.core.tokens import CODES
 from doodle.input.segmenter import SegmenterParams, tokenize
 from grammar import shapes
+from grammar.automata import compile_expression
+from grammar.expr import Alt, Cat, Repeat, Sym, parse
+from grammar.matcher import Automaton, _insertion_closure
 
 POINTS = 128  # samples per example for the DTW average
 ITERATIONS = 8
@@ -70,41 +74,69 @@ def _resample(t, x, n):
     return np.column_stack([np.interp(grid, t, c) for c in x.T])
 
 
+def _sq_costs(a: np.ndarray, bs: np.ndarray) -> np.ndarray:
+    """``cost[k, i, j] = |a[i] − bs[k, j]|²`` (k, n, m): for few dimensions summed one
+    dimension at a time — the same additions, in the same order, as numpy's sum over a short
+    last axis (under 8 values: one after the other), without the (k, n, m, d) temporary."""
+    d = a.shape[1]
+    if d >= 8:  # numpy sums 8 or more values pairwise: keep its order
+        return ((a[None, :, None, :] - bs[:, None, :, :]) ** 2).sum(axis=3)
+    cost = np.zeros((len(bs), len(a), bs.shape[1]))
+    diff = np.empty_like(cost)
+    for c in range(d):
+        np.subtract(a[None, :, None, c], bs[:, None, :, c], out=diff)
+        np.multiply(diff, diff, out=diff)
+        cost += diff
+    return cost
+
+
 def _dtw_paths(a: np.ndarray, bs: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
     """Indices (i, j) of the optimal DTW alignment (squared l2 cost) of a (n, d) with each
-    of bs (k, m, d) — the cumulative costs of all k computed at once, row by row."""
+    of bs (k, m, d) — the cumulative costs of all k computed at once, row by row; each path
+    walked back from the end by the moves chosen for every cell at once (diagonal, then up,
+    then left on ties)."""
+    a = np.asarray(a, dtype=float)
     bs = np.asarray(bs, dtype=float)
     k, m, _ = bs.shape
     n = len(a)
-    cost = ((a[None, :, None, :] - bs[:, None, :, :]) ** 2).sum(axis=3)  # (k, n, m)
+    cost = _sq_costs(a, bs)  # (k, n, m)
+    c = np.cumsum(cost, axis=2)  # per row, from (i, j-1): a prefix minimum
     D = np.empty((k, n, m))
-    D[:, 0] = np.cumsum(cost[:, 0], axis=1)
+    D[:, 0] = c[:, 0]
+    row = np.empty((k, m))
     for i in range(1, n):
-        base = np.empty((k, m))
-        base[:, 0] = cost[:, i, 0] + D[:, i - 1, 0]
-        base[:, 1:] = cost[:, i, 1:] + np.minimum(D[:, i - 1, :-1], D[:, i - 1, 1:])  # from (i-1, j-1) or (i-1, j)
-        c = np.cumsum(cost[:, i], axis=1)  # from (i, j-1): a prefix minimum
-        D[:, i] = np.minimum.accumulate(base - c, axis=1) + c
+        prev = D[:, i - 1]
+        row[:, 0] = prev[:, 0]
+        np.minimum(prev[:, :-1], prev[:, 1:], out=row[:, 1:])  # from (i-1, j-1) or (i-1, j)
+        row += cost[:, i]
+        row -= c[:, i]
+        np.minimum.accumulate(row, axis=1, out=row)
+        np.add(row, c[:, i], out=D[:, i])
+    # the move into each cell (i, j ≥ 1): 0 diagonal, 1 up, 2 left
+    diag, up, left = D[:, :-1, :-1], D[:, :-1, 1:], D[:, 1:, :-1]
+    moves = np.where((diag <= up) & (diag <= left), 0, np.where(up <= left, 1, 2)).astype(np.uint8).tobytes()
     out = []
-    for Dk in D.tolist():  # Python floats: the walk back reads them one by one
+    for kk in range(k):
+        base = kk * (n - 1) * (m - 1)
         i, j = n - 1, m - 1
-        path = [(i, j)]
-        while i > 0 or j > 0:
-            if i == 0:
-                j -= 1
-            elif j == 0:
+        ii, jj = [i], [j]
+        while i and j:
+            move = moves[base + (i - 1) * (m - 1) + j - 1]
+            if move == 0:
+                i, j = i - 1, j - 1
+            elif move == 1:
                 i -= 1
             else:
-                diag, up, left = Dk[i - 1][j - 1], Dk[i - 1][j], Dk[i][j - 1]
-                if diag <= up and diag <= left:
-                    i, j = i - 1, j - 1
-                elif up <= left:
-                    i -= 1
-                else:
-                    j -= 1
-            path.append((i, j))
-        ij = np.array(path[::-1])
-        out.append((ij[:, 0], ij[:, 1]))
+                j -= 1
+            ii.append(i)
+            jj.append(j)
+        if i:
+            ii += range(i - 1, -1, -1)
+            jj += [0] * i
+        elif j:
+            jj += range(j - 1, -1, -1)
+            ii += [0] * j
+        out.append((np.array(ii[::-1]), np.array(jj[::-1])))
     return out
 
 
@@ -122,19 +154,23 @@ def dba(examples: list[tuple[np.ndarray, np.ndarray, np.ndarray]], points: int =
         qs = _resample(t, q, points)
         quats.append(qs / np.linalg.norm(qs, axis=1, keepdims=True))
         feats.append(np.column_stack([_resample(t, p, points), LEVER * quat.log(quats[-1])]))
-    from grammar.shapes import dtw_costs
-
-    stacked = np.array(feats)
-    dist = np.array([dtw_costs(f, stacked) for f in feats])
+    stacked, stacked_q = np.array(feats), np.array(quats)
+    dist = shapes.dtw_costs(stacked, stacked)  # (examples, examples), all pairs at once
     medoid = int(np.argmin(dist.sum(axis=1)))
     avg, avg_q = feats[medoid].copy(), quats[medoid].copy()
     for _ in range(iterations):
+        # every example's aligned samples in one list, example after example (the sums
+        # below add them in that order)
+        paths = _dtw_paths(avg, stacked)
+        i = np.concatenate([rows for rows, _ in paths])
+        which = np.concatenate([np.full(len(cols), k) for k, (_, cols) in enumerate(paths)])
+        j = np.concatenate([cols for _, cols in paths])
         sums, qsum, counts = np.zeros_like(avg), np.zeros_like(avg_q), np.zeros(points)
-        for f, qq, (i, j) in zip(feats, quats, _dtw_paths(avg, stacked)):
-            np.add.at(sums, i, f[j])
-            signs = np.where(np.sum(qq[j] * avg_q[i], axis=1) < 0, -1.0, 1.0)
-            np.add.at(qsum, i, qq[j] * signs[:, None])
-            np.add.at(counts, i, 1)
+        np.add.at(sums, i, stacked[which, j])
+        qq = stacked_q[which, j]
+        signs = np.where(np.sum(qq * avg_q[i], axis=1) < 0, -1.0, 1.0)
+        np.add.at(qsum, i, qq * signs[:, None])
+        np.add.at(counts, i, 1)
         new = sums / counts[:, None]
         avg_q = qsum / np.linalg.norm(qsum, axis=1, keepdims=True)
         if np.allclose(new, avg, atol=1e-6):
@@ -164,17 +200,17 @@ def token_string(track: Track, rate: float, params: SegmenterParams = SegmenterP
 def _align(ref: list[str], seq: list[str]) -> list[tuple[int | None, int | None]]:
     """Levenshtein alignment of seq to ref: pairs (ref index | None, seq index | None)."""
     n, m = len(ref), len(seq)
-    D = np.zeros((n + 1, m + 1))
-    D[:, 0], D[0, :] = np.arange(n + 1), np.arange(m + 1)
+    D = [list(range(m + 1))] + [[i] + [0] * m for i in range(1, n + 1)]  # edit counts (ints)
     for i in range(1, n + 1):
+        above, row, r = D[i - 1], D[i], ref[i - 1]
         for j in range(1, m + 1):
-            D[i, j] = min(D[i - 1, j] + 1, D[i, j - 1] + 1, D[i - 1, j - 1] + (ref[i - 1] != seq[j - 1]))
+            row[j] = min(above[j] + 1, row[j - 1] + 1, above[j - 1] + (r != seq[j - 1]))
     pairs, i, j = [], n, m
     while i or j:
-        if i and j and D[i, j] == D[i - 1, j - 1] + (ref[i - 1] != seq[j - 1]):
+        if i and j and D[i][j] == D[i - 1][j - 1] + (ref[i - 1] != seq[j - 1]):
             pairs.append((i - 1, j - 1))
             i, j = i - 1, j - 1
-        elif i and D[i, j] == D[i - 1, j] + 1:
+        elif i and D[i][j] == D[i - 1][j] + 1:
             pairs.append((i - 1, None))
             i -= 1
         else:
@@ -186,6 +222,12 @@ def _align(ref: list[str], seq: list[str]) -> list[tuple[int | None, int | None]
 def expression_of(strings: list[tuple[str, ...]], reference: int = -1) -> Learned:
     """The compact expression of §4.2.5 accepting every string; mandatory columns are
     aligned to ``strings[reference]`` (the average's)."""
+    return _expression(strings, reference)[0]
+
+
+def _expression(strings: list[tuple[str, ...]], reference: int = -1) -> tuple[Learned, object]:
+    """:func:`expression_of`, and the expression's tree as :func:`grammar.expr.parse` reads
+    its text (built alongside it: no parsing)."""
     strings = [tuple(s) for s in strings]
     if not any(strings):
         raise DoodleError("every example is still: nothing to learn (move the controller while recording)")
@@ -229,19 +271,29 @@ def expression_of(strings: list[tuple[str, ...]], reference: int = -1) -> Learne
             gap[kind[1] if kind else next_col].append(x)
         cells.append(col)
         gaps.append(gap)
-    parts = []
+    parts, nodes = [], []
+
+    def sym(x):
+        return Sym(CODES[x])
+
     for k in range(columns + 1):
         runs = sorted({tuple(g[k]) for g in gaps})
         if len(runs) == 1 and runs[0]:
             parts.append(" ".join(runs[0]))  # every string has this run: a quick intentional gesture
+            nodes += [sym(x) for x in runs[0]]
         elif any(runs):
             options = [" ".join(r) for r in runs if r]
             parts.append("(" + " | ".join(f"({o})" if " " in o else o for o in options) + ")*")
+            alts = [sym(r[0]) if len(r) == 1 else Cat(tuple(sym(x) for x in r)) for r in runs if r]
+            nodes.append(Repeat(alts[0] if len(alts) == 1 else Alt(tuple(alts)), 0, True))
         if k < columns:
             tokens = sorted({c[k] for c in cells if c[k] is not None})
             body = tokens[0] if len(tokens) == 1 else "(" + " | ".join(tokens) + ")"
-            parts.append(body + ("+" if all(c[k] is not None for c in cells) else "*"))
-    return Learned(" ".join(parts), tuple(strings), mandatory)
+            every = all(c[k] is not None for c in cells)
+            parts.append(body + ("+" if every else "*"))
+            nodes.append(Repeat(sym(tokens[0]) if len(tokens) == 1 else Alt(tuple(sym(x) for x in tokens)),
+                                1 if every else 0, True))
+    return Learned(" ".join(parts), tuple(strings), mandatory), nodes[0] if len(nodes) == 1 else Cat(tuple(nodes))
 
 
 def learn(examples: list[tuple[np.ndarray, np.ndarray, np.ndarray]], rate: float,
@@ -273,17 +325,11 @@ def distances(expressions: list[str], string: tuple[str, ...], cap: float = 40.0
 
 
 def _automaton(expressions: list[str], cap: float):
-    from grammar.automata import compile_expression
-    from grammar.expr import parse
-    from grammar.matcher import Automaton
-
     return Automaton([str(k) for k in range(len(expressions))],
                      [compile_expression(parse(e)) for e in expressions], threshold=cap, protect_still=False)
 
 
 def _run(auto, string: tuple[str, ...]) -> np.ndarray:
-    from doodle.core.tokens import CODES
-
     d = auto.initial.copy()
     for name in string:
         d = auto.step(d, CODES[name])
@@ -297,12 +343,10 @@ def tolerance(strings: tuple[tuple[str, ...], ...], examples: int) -> float:
     held = [k for k in range(examples) if any(s for j, s in enumerate(strings) if j != k)]
     if not held:
         return MIN_TOLERANCE
-    from grammar.automata import compile_expression
-    from grammar.expr import parse
-
-    worst = max(_edit_distance(compile_expression(parse(expression_of([s for j, s in enumerate(strings)
-                                                                        if j != k]).expression)),
-                               strings[k], MAX_TOLERANCE) for k in held)
+    # the distance is the language's, whatever DFA accepts it: the subset construction's
+    # serves as well as the minimal one (and the tree is the one the expression's text parses to)
+    worst = max(_edit_distance(compile_expression(_expression([s for j, s in enumerate(strings) if j != k])[1],
+                                                  minimal=False), strings[k], MAX_TOLERANCE) for k in held)
     return float(np.clip(worst + 1.0, MIN_TOLERANCE, MAX_TOLERANCE))
 
 
@@ -310,9 +354,6 @@ def _edit_distance(dfa, string: tuple[str, ...], cap: float) -> float:
     """Edit distance (1 per insertion, deletion, substitution) from a token string to one
     DFA's language, capped — the Matcher's recurrence for one action without building its
     tables for every token."""
-    from doodle.core.tokens import CODES
-    from grammar.matcher import _insertion_closure
-
     reach = _insertion_closure(dfa, cap + 1.0)  # fewest insertions from p to r
     src, sym = np.nonzero(dfa.table >= 0)
     dst = dfa.table[src, sym]

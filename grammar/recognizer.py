@@ -219,9 +219,10 @@ class _Chain:
     def __init__(self, live: "Live", name: str, offset: int):
         self.name, self.offset = name, offset
         self.segmenter = Segmenter(live.rate, live.params, name, live.source)
-        auto = live.automata[name]
+        self.tokens_only = live.compiled is None  # nothing to recognise: tokens only
+        auto = None if self.tokens_only else live.automata[name]
         self.matcher = Matcher(auto, name) if auto is not None else None  # None: it only partners two-handed actions
-        shapes = live.compiled.shapes
+        shapes = None if self.tokens_only else live.compiled.shapes
         others = {o: (None, None, None) for o in live.names if o != name}  # filled as samples come
         self.refiner = (Refiner(shapes, np.zeros((0, 3)), np.zeros(0, dtype=bool), name, np.zeros((0, 4)), others)
                         if shapes is not None and auto is not None else None)
@@ -229,6 +230,9 @@ class _Chain:
         self.segments: list[Segment] = []
 
     def feed(self, tokens: list[Token], tape: _Tape, close: bool = False) -> list[Segment]:
+        if self.tokens_only:
+            self.tokens += tokens
+            return []
         segments = []
         if self.matcher is None:
             self.tokens += tokens
@@ -285,23 +289,27 @@ class Live:
     decides it. With ``restart``, a track whose samples the Segmenter refuses (tracking back
     after a gap too long to bridge) starts afresh at that frame, what came before staying
     final (live recording); without, the error propagates (a file is read as a whole).
+    ``compiled`` None streams the tokens alone (a library with nothing to recognise yet):
+    no segments, and :attr:`result` has each track's tokens with none.
     """
 
-    def __init__(self, compiled: Compiled, names: list[str], rate: float, params: SegmenterParams = SegmenterParams(),
+    def __init__(self, compiled: Compiled | None, names: list[str], rate: float, params: SegmenterParams = SegmenterParams(),
                  threshold: float = 2.0, source: str = "<stream>", automata: dict | None = None,
                  restart: bool = False):
         self.compiled, self.names, self.rate, self.params = compiled, list(names), float(rate), params
         self.threshold, self.source, self.restart = threshold, source, restart
-        self.automata = automata if automata is not None else track_automata(compiled, self.names, threshold)
+        if automata is None:
+            automata = track_automata(compiled, self.names, threshold) if compiled is not None else {}
+        self.automata = automata
         self.tape = _Tape(self.names)
         self.chains = {n: _Chain(self, n, 0) for n in self.names}
         self._done = {n: ([], []) for n in self.names}  # tokens and segments of finished chains, shifted
-        self._rules = behaviours(compiled)
-        self._pairs = two_handed(compiled)
+        self._rules = behaviours(compiled) if compiled is not None else {}
+        self._pairs = two_handed(compiled) if compiled is not None else {}
         self._laying = []  # two-handed segments still to be heard on their other tracks
-        self._state = {n: frozenset(compiled.library.states) for n in self.names}
+        self._state = {n: frozenset(compiled.library.states if compiled is not None else ()) for n in self.names}
         self._contexter = None
-        if len(self.names) > 1 and compiled.library.interactions:
+        if compiled is not None and len(self.names) > 1 and compiled.library.interactions:
             self._contexter = LiveContexter(self.tape, compiled, threshold)
         self.result: dict | None = None
 
@@ -344,7 +352,7 @@ class Live:
         if self._contexter is not None:
             heard += self._interactions(self._contexter.close())
         view = {n: tuple(self._done[n]) for n in self.names}
-        self.result = decide(self.tape, self.compiled, view, self.threshold)
+        self.result = decide(self.tape, self.compiled, view, self.threshold) if self.compiled is not None else view
         return Step(tokens, heard, {})
 
     def _global(self, name: str, tokens: list[Token]) -> list[Token]:

@@ -240,3 +240,139 @@ def test_record_wizard_with_a_synthetic_source(tmp_path, monkeypatch, capsys):
     monkeypatch.undo()
     assert main(["learn", "X", "--record", "--library", str(tmp_path / "none")]) == 1
     assert "SteamVR" in capsys.readouterr().err
+
+
+# --- the quick learning gives what the plain algorithms give -------------------------------
+
+def _plain_dtw_paths(a, bs):
+    """DTW alignments as learning first computed them: the cost matrix summed over the last
+    axis, the rows' recurrence with fresh arrays, the walk back reading the costs."""
+    k, m, _ = bs.shape
+    n = len(a)
+    cost = ((a[None, :, None, :] - bs[:, None, :, :]) ** 2).sum(axis=3)
+    D = np.empty((k, n, m))
+    D[:, 0] = np.cumsum(cost[:, 0], axis=1)
+    for i in range(1, n):
+        base = np.empty((k, m))
+        base[:, 0] = cost[:, i, 0] + D[:, i - 1, 0]
+        base[:, 1:] = cost[:, i, 1:] + np.minimum(D[:, i - 1, :-1], D[:, i - 1, 1:])
+        c = np.cumsum(cost[:, i], axis=1)
+        D[:, i] = np.minimum.accumulate(base - c, axis=1) + c
+    out = []
+    for Dk in D.tolist():
+        i, j = n - 1, m - 1
+        path = [(i, j)]
+        while i > 0 or j > 0:
+            if i == 0:
+                j -= 1
+            elif j == 0:
+                i -= 1
+            else:
+                diag, up, left = Dk[i - 1][j - 1], Dk[i - 1][j], Dk[i][j - 1]
+                if diag <= up and diag <= left:
+                    i, j = i - 1, j - 1
+                elif up <= left:
+                    i -= 1
+                else:
+                    j -= 1
+            path.append((i, j))
+        ij = np.array(path[::-1])
+        out.append((ij[:, 0], ij[:, 1]))
+    return out
+
+
+def _plain_dba(examples, points=128, iterations=8):
+    """The DTW barycenter average as learning first computed it (one example at a time)."""
+    from doodle.core import quat
+    from grammar.learn import LEVER, _resample, canonical
+    from grammar.shapes import dtw_costs
+
+    feats, quats = [], []
+    for t, p, q in examples:
+        t, p, q = canonical(t, p, q)
+        qs = _resample(t, q, points)
+        quats.append(qs / np.linalg.norm(qs, axis=1, keepdims=True))
+        feats.append(np.column_stack([_resample(t, p, points), LEVER * quat.log(quats[-1])]))
+    stacked = np.array(feats)
+    medoid = int(np.argmin(np.array([dtw_costs(f, stacked) for f in feats]).sum(axis=1)))
+    avg, avg_q = feats[medoid].copy(), quats[medoid].copy()
+    for _ in range(iterations):
+        sums, qsum, counts = np.zeros_like(avg), np.zeros_like(avg_q), np.zeros(points)
+        for f, qq, (i, j) in zip(feats, quats, _plain_dtw_paths(avg, stacked)):
+            np.add.at(sums, i, f[j])
+            signs = np.where(np.sum(qq[j] * avg_q[i], axis=1) < 0, -1.0, 1.0)
+            np.add.at(qsum, i, qq[j] * signs[:, None])
+            np.add.at(counts, i, 1)
+        new = sums / counts[:, None]
+        avg_q = qsum / np.linalg.norm(qsum, axis=1, keepdims=True)
+        done = np.allclose(new, avg, atol=1e-6)
+        avg = new
+        if done:
+            break
+    return avg, avg_q
+
+
+def _plain_tolerance(strings, examples):
+    """Leave-one-out tolerance through the expressions' text, parsed and compiled to minimal DFAs."""
+    from grammar.automata import compile_expression
+    from grammar.expr import parse
+    from grammar.learn import MAX_TOLERANCE, MIN_TOLERANCE, _edit_distance
+
+    held = [k for k in range(examples) if any(s for j, s in enumerate(strings) if j != k)]
+    worst = max(_edit_distance(compile_expression(parse(expression_of([s for j, s in enumerate(strings)
+                                                                        if j != k]).expression)),
+                               strings[k], MAX_TOLERANCE) for k in held)
+    return float(np.clip(worst + 1.0, MIN_TOLERANCE, MAX_TOLERANCE))
+
+
+def test_quick_dtw_paths_are_the_plain_ones():
+    from grammar.learn import _dtw_paths
+
+    rng = np.random.default_rng(5)
+    for trial in range(60):
+        n, m, k, d = rng.integers(2, 30), rng.integers(2, 30), rng.integers(1, 4), rng.integers(1, 10)
+        a, bs = rng.normal(size=(n, d)), rng.normal(size=(k, m, d))
+        if trial % 3 == 0:  # ties everywhere
+            a, bs = np.round(a), np.round(bs)
+        for (i, j), (pi, pj) in zip(_dtw_paths(a, bs), _plain_dtw_paths(a, bs), strict=True):
+            assert np.array_equal(i, pi) and np.array_equal(j, pj)
+
+
+@settings(max_examples=80, deadline=None)
+@given(st.lists(token_strings, min_size=1, max_size=5))
+def test_expression_tree_is_what_its_text_parses_to(strings):
+    from grammar.expr import parse
+    from grammar.learn import _expression
+
+    learned, tree = _expression(strings)
+    assert parse(learned.expression) == tree
+
+
+@pytest.mark.parametrize("user,gesture,track,expression,tol", [
+    ("Sub_U001", "hook_left", "c0",
+     "((R_N_Y_Z T_N_X_N_Z R_X_Y))* (T_N_X | T_N_X_N_Z)+ (R_X_Y | (R_Y_N_Z R_X_N_Z) | T_N_X)* R_N_Z+ (R_N_X_N_Z)* "
+     "T_N_X+ ((R_N_X_N_Z R_N_X_N_Y R_N_X_N_Y_Z R_N_Y_Z) | R_N_X_Z | T_N_X_Y)* R_Z+ T_X+ ((T_X_N_Y R_X_N_Z))* "
+     "R_N_Z* ((R_N_Y_N_Z R_X_N_Z R_Y_N_Z T_N_X))*", 11.0),
+    ("Sub_U004", "left_right_left_combo", "c0",
+     "(R_X_Y | (R_Y_N_Z R_N_Z))* R_X_N_Z+ ((R_N_Z R_Y_N_Z R_X_Y) | (R_N_Z R_Y_N_Z R_Y R_X_Y) | R_X_Y_N_Z | "
+     "(R_Y_N_Z R_X_Y R_X_Y_N_Z))* R_Y+ T_N_Y+ ((R_N_Y T_Y) | (R_N_Y T_Y R_N_Y R_N_X_Y R_N_X))* R_N_Y+ "
+     "((R_N_Y_Z T_X R_Y R_N_X_Y) | (T_X R_Y R_N_X))* T_N_X+ ((T_N_X_Z R_N_X_Z R_Z) | (T_N_Y R_N_Y_Z R_N_Y R_X) | "
+     "(T_N_Y_Z R_N_Y R_N_Y_Z))* (R_N_Y | R_N_Z | R_X_N_Z)+ (R_N_X_N_Z | R_N_Y_N_Z)* R_N_X+ "
+     "(R_N_X_Z | (R_N_X_Z R_Z R_N_X_Z))*", 11.0),
+])
+def test_learning_real_gestures_as_before(user, gesture, track, expression, tol):
+    """Learning was made quicker (alignments, automata, no parsing) without changing what it
+    learns: on real recordings the average is the plain algorithm's to the bit, and the
+    expression and tolerance are the ones learned before."""
+    from doodle.core import quat
+    from doodle.input.csvimport import read_csv
+
+    doodles = [read_csv(f, convention="unity") for f in _vive(gesture, user)[:3]]
+    examples = [(d.track(track).t, d.track(track).p, d.track(track).q) for d in doodles]
+    avg, avg_q = _plain_dba(examples)
+    quick = dba(examples)
+    assert np.array_equal(quick.p, avg[:, :3])
+    assert np.array_equal(quick.q, quat.make_continuous(avg_q))
+    learned = learn(examples, doodles[0].rate)
+    assert learned.expression == expression and learned.tolerance == tol
+    assert _plain_tolerance(learned.strings, 3) == tol

@@ -135,7 +135,8 @@ class _Live:
 
 def record(source, path, *, clock=time.monotonic, sleep=time.sleep, wait_for_trigger: bool = False,
            max_seconds: float | None = None, on_event=None, library_dir=None, use_builtin: bool = True,
-           params: SegmenterParams = SegmenterParams(), compiled=None, overwrite: bool = False) -> RecordResult:
+           params: SegmenterParams = SegmenterParams(), compiled=None, overwrite: bool = False,
+           mounts: dict | None = None, recognise: bool = True) -> RecordResult:
     """Record ``source`` (see :mod:`doodle.input.sources`) into the doodle file ``path``.
 
     Reads one frame per tick of ``1/source.rate`` seconds on ``clock``, sleeping until each
@@ -145,7 +146,10 @@ def record(source, path, *, clock=time.monotonic, sleep=time.sleep, wait_for_tri
     (KeyboardInterrupt ends it cleanly). Actions come from the built-in library, extended by
     ``library_dir`` (``compiled``, a compiled library, given instead skips compiling it),
     recognised by the one Recognizer as ``doodle recognize`` does: learned shapes,
-    interactions between tracks and behaviour states included. The caller closes the
+    interactions between tracks and behaviour states included; with ``recognise`` False no
+    library is read and the tokens alone are shown (nothing to recognise yet). Orientations
+    are mounted by the device's profile, or by ``mounts`` (track → device-to-figurine
+    quaternion, from calibration) where given, as the file will be read. The caller closes the
     source. The file is created at the first recorded frame; an existing file is refused
     unless ``overwrite``. Raises DoodleError when fewer than two samples were recorded
     (nothing is left on disk then).
@@ -155,7 +159,7 @@ def record(source, path, *, clock=time.monotonic, sleep=time.sleep, wait_for_tri
         raise DoodleError(f"{path}: already exists (pass --overwrite to replace it)")
     if max_seconds is not None and not (max_seconds > 0 and np.isfinite(max_seconds)):
         raise DoodleError(f"recording length must be a positive number of seconds, not {max_seconds!r}")
-    if compiled is None:
+    if compiled is None and recognise:
         from grammar.recognizer import load_actions
 
         compiled = load_actions(library_dir, use_builtin)
@@ -183,7 +187,8 @@ def record(source, path, *, clock=time.monotonic, sleep=time.sleep, wait_for_tri
                     t0 = frame.t
                     writer = DoodleWriter(path, source.tracks, rate, source.device, overwrite=overwrite)
                     names = [name for name, _, _ in source.tracks]
-                    live = _Live(compiled, names, rate, params, [mount] * len(names), times, emit)
+                    live = _Live(compiled if recognise else None, names, rate, params,
+                                 [(mounts or {}).get(n, mount) for n in names], times, emit)
                     emit("started", {"t": 0.0, "path": str(path), "tracks": [name for name, _, _ in source.tracks]})
                 elif wait_for_trigger and frame.trigger:
                     reason = "trigger"

@@ -49,13 +49,17 @@ def open_source():
     return OpenVRSource()
 
 
-def record_takes(name: str, folder: Path, takes: int = TAKES, sleep=time.sleep) -> list[str]:
+def record_takes(name: str, folder: Path, takes: int = TAKES, sleep=time.sleep, *, compiled=None,
+                 params=None, mounts: dict | None = None) -> list[str]:
     """The wizard: ``takes`` performances recorded with the controllers, each started and
-    stopped with the trigger after a countdown, shown live; saved in ``folder/takes/`` under
-    names no earlier take has (a take is a performance: never overwritten)."""
+    stopped with the trigger after a countdown, shown live — tokens, and the actions the
+    library ``compiled`` recognises in them as ``doodle recognize`` would (its learned
+    shapes included; None: the tokens alone); saved in ``folder/takes/`` under names no
+    earlier take has (a take is a performance: never overwritten)."""
     from doodle.app.cli.record import _View
     from doodle.app.recorder import record
     from doodle.core.files import output_dir, safe_file_name
+    from doodle.input.segmenter import SegmenterParams
 
     try:
         source = open_source()
@@ -74,7 +78,8 @@ def record_takes(name: str, folder: Path, takes: int = TAKES, sleep=time.sleep) 
                 print(f"{n}… ", end="", flush=True)
                 sleep(1.0)
             print("press the trigger, perform the gesture, press the trigger again", flush=True)
-            result = record(source, path, wait_for_trigger=True, on_event=_View())
+            result = record(source, path, wait_for_trigger=True, on_event=_View(), compiled=compiled,
+                            recognise=compiled is not None, params=params or SegmenterParams(), mounts=mounts)
             print(f"  take {k}: {result.duration:.2f} s, {result.samples} samples → {path}", flush=True)
             paths.append(str(path))
     finally:
@@ -181,11 +186,14 @@ def cmd_learn(args) -> int:
                               "--replace it")
 
     clashing([name])  # before any recording
+    params, mounts = segmenter_params(args)
     if args.record:
-        args.examples = record_takes(name, folder, TAKES)
+        live = combine(None if args.no_builtin else builtin(), existing)  # shown live: what recognize would say
+        recognisable = any(a.expression.strip() and not a.interaction_only for a in live.actions)
+        args.examples = record_takes(name, folder, TAKES, compiled=compile_library(live) if recognisable else None,
+                                     params=params, mounts=mounts)
     if len(args.examples) < 2:
         raise DoodleError(f"give at least two example files (three are best), got {len(args.examples)}")
-    params, mounts = segmenter_params(args)
     doodles = [load_input(path, args, mounts) for path in args.examples]
     tracks = doodles[0].names if args.tracks else doodles[0].names[:1]
     for path, d in zip(args.examples, doodles):
