@@ -142,8 +142,10 @@ def emote(t: np.ndarray, p: np.ndarray, q: np.ndarray, time: int, weight: int, r
             np.interp(inside, *_strictly(arc[a:b + 1], t[a:b + 1]))
         pos = np.column_stack([np.interp(tn, t, p[:, k]) for k in range(3)])
         beyond = target - inside  # anticipation (< 0) and overshoot (> 0) continue the stroke's end tangents
-        head = p[min(a + 2, b)] - p[a]
-        tail = p[b] - p[max(b - 2, a)]
+        seg_arc, seg_t = _strictly(arc[a:b + 1], t[a:b + 1])  # the directions it leaves and arrives in,
+        near = np.interp([seg_arc[0] + 0.05 * length, seg_arc[-1] - 0.05 * length], seg_arc, seg_t)  # rests skipped
+        head = np.array([np.interp(near[0], t, p[:, k]) for k in range(3)]) - p[a]
+        tail = p[b] - np.array([np.interp(near[1], t, p[:, k]) for k in range(3)])
         head = head / max(np.linalg.norm(head), 1e-12)
         tail = tail / max(np.linalg.norm(tail), 1e-12)
         pos += np.where(beyond[:, None] < 0, beyond[:, None] * head, beyond[:, None] * tail)
