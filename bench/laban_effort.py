@@ -2,7 +2,9 @@
 Naive Bayes classifier's cost; training the default models; accuracy of the shipped model on
 generated held-out performers per Factor, State and Drive for the three methods (thesis
 anchors beside them); agreement of the qualities given to repetitions of the same gesture by
-the same user on the real Vive recordings, beside chance agreement."""
+the same user on the real Vive recordings, beside chance agreement; and the cross-procedure
+evaluation of Time and Weight on effort applied to real neutral motion capture (train on one
+procedure, test on the other, per size and tracking rate, beside the thesis's figures)."""
 
 import collections
 import time
@@ -56,6 +58,23 @@ def main() -> None:
               f"Element HMM {r['element_hmm']['drive']:.3f} / {r['element_hmm']['state']:.3f}   ({thesis[k]})")
 
     _real(model)
+    print()
+    cross_procedure()
+
+
+def cross_procedure() -> None:
+    """``python -m bench.laban_effort``'s last table: see :mod:`doodle.app.effort_corpus`."""
+    from doodle.app.effort_corpus import MOCAP, cross_procedure as run, reliability, table
+
+    if not MOCAP.is_dir():
+        print(f"Cross-procedure Effort accuracy: motion capture not found under {MOCAP}")
+        return
+    start = time.perf_counter()
+    rep = run(MOCAP)
+    print("\n".join(table(rep)))
+    rel = reliability(rep)
+    print(f"  calibration (cross-procedure runs): expected calibration error Time {rel['time']['ece']:.3f}, "
+          f"Weight {rel['weight']['ece']:.3f}  ({time.perf_counter() - start:.0f} s)")
 
 
 def _real(model) -> None:

@@ -1,12 +1,13 @@
-"""Effort of one trajectory segment: the Drive HMM's likelihoods (§4.4.2, the thesis's best
-method) turned into Time and Weight with a confidence (§4.4.3: Space is not applied — it
-would contradict the action the tokens spelled).
+"""Effort of one trajectory segment: Time and Weight with a confidence (§4.4.3: Space is not
+applied — it would contradict the action the tokens spelled).
 
-The eight Drive log-likelihoods, divided by a temperature calibrated on held-out data (so a
-confidence of 0.8 is right about 80 % of the time), give a posterior over Drives under a
-uniform prior; summing it over the Drives that are Sudden gives ``P(Sudden)``, likewise
-``P(Strong)``. The quality applied is ``L = 2P − 1`` ∈ [−1, 1] (+1 Sudden / Strong), or 0
-(neutral) when the confidence ``max(P, 1 − P)`` is under the model's threshold.
+``P(Sudden)`` and ``P(Strong)`` come from the model's calibrated Time and Weight classifiers
+on the Effort features (:mod:`laban.factors`, :func:`laban.features.effort_features`), which
+describe the movement's quality whatever its size (a figurine, an arm, a walking body) and
+its tracking rate (30–144 Hz). The quality applied is ``L = 2P − 1`` ∈ [−1, 1] (+1 Sudden /
+Strong), or 0 (neutral: abstention) when the confidence ``max(P, 1 − P)`` is under the
+model's threshold. The Drive named beside it is the Drive HMM's (§4.4.2) most likely one
+among the two with that Time and Weight — the HMM only adds Space.
 """
 
 from __future__ import annotations
@@ -16,7 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from laban.efforts import DRIVES, drive_of, element, state_of
-from laban.features import sequence
+from laban.features import effort_features, sequence
 from laban.models import EffortModel
 
 MIN_SAMPLES = 8  # a segment shorter than this is left neutral
@@ -63,16 +64,19 @@ def quality(model: EffortModel, t: np.ndarray, p: np.ndarray, q: np.ndarray) -> 
     turn = float(2 * np.arccos(np.clip(np.abs(q @ q[0]), 0.0, 1.0)).max())
     if reach < STILL_REACH and turn < STILL_TURN:
         return NEUTRAL
-    post = drive_posterior(model, t, p, q)
-    labels = model.drives.labels
-    sudden = float(sum(w for w, d in zip(post, labels) if DRIVES[d][1] > 0))
-    strong = float(sum(w for w, d in zip(post, labels) if DRIVES[d][2] > 0))
+    x = effort_features(t, p)[None]
+    sudden = float(model.factors["time"].probability(x)[0])
+    strong = float(model.factors["weight"].probability(x)[0])
 
     def applied(prob):
         return round(2 * prob - 1, 3) if max(prob, 1 - prob) >= model.threshold else 0.0
 
-    best = labels[int(np.argmax(post))]
-    return Quality(applied(sudden), applied(strong), sudden, strong, best, state_of(DRIVES[best][1], DRIVES[best][2]))
+    ts, ws = (1 if sudden >= 0.5 else -1), (1 if strong >= 0.5 else -1)
+    post = drive_posterior(model, t, p, q)
+    labels = model.drives.labels
+    same = [k for k, d in enumerate(labels) if DRIVES[d][1:] == (ts, ws)]
+    best = labels[max(same, key=lambda k: post[k])]
+    return Quality(applied(sudden), applied(strong), sudden, strong, best, state_of(ts, ws))
 
 
 def bayes_drive(model: EffortModel, X: np.ndarray) -> list[str]:

@@ -305,3 +305,185 @@ def sequence(
     grid = np.linspace(k.t[0], k.t[-1], points)
     x = _resample(k.t, grid, x)
     return np.sign(x) * np.log1p(np.abs(x))
+
+
+# --- Effort features: what Time and Weight are, whatever the size and the sampling --------------
+#
+# The Drive HMM above reads the thesis's raw kinematics (m/s, m/s², m/s³), which change with
+# the size of the movement (a figurine's 20 cm against an arm's 1.5 m) and, through the
+# derivative filter, with the sampling rate. The Time and Weight decisions read these instead.
+#
+# Rate: every segment is first brought to one signal — a cubic spline through its samples
+# (natural end conditions; a 30 Hz take keeps a 5 Hz component within ~1 %) evaluated on
+# a fixed EFFORT_RATE grid, then low-passed by a Gaussian of EFFORT_SIGMA seconds and
+# differentiated (central differences) into velocity, acceleration and jerk. The filter's
+# response is −3 dB near 4 Hz and nil at 15 Hz, the Nyquist frequency of the slowest rate accepted (30 Hz): the same
+# movement sampled at 30, 60, 90 or 144 Hz becomes the same smoothed signal. Voluntary hand
+# movement lies below ~5 Hz (physiological tremor, 8–12 Hz, is removed too).
+#
+# Size: a length only ever appears divided by the segment's own extent (twice the largest
+# distance from its centroid) and a speed by its own mean or peak, so uniform scaling of the
+# path leaves every feature unchanged. Time remains in seconds: Sudden and Sustained ARE
+# durations and rates of change (Laban; EMOTE, Chi et al. 2000, sets Time by the duration and
+# the timing of a stroke).
+#
+# Where each feature comes from is in EFFORT_SOURCES.
+
+EFFORT_RATE = 120.0  # Hz, the grid every segment is brought to
+EFFORT_SIGMA = 0.04  # s, Gaussian low-pass (and derivative) width
+ACTIVE = 0.1  # the movement is where the speed is above this share of its peak
+STROKE_FLOOR = 0.3  # a stroke is a speed peak above this share of the segment's peak ...
+STROKE_DIP = 0.5  # ... with a prominence of this share of that floor
+
+EFFORT_SOURCES: dict[str, str] = {
+    "Active Duration": "log s the speed is above 10 % of its peak. Time: Sudden is brief, Sustained "
+                       "lingers (Laban 1947; EMOTE sets a stroke's duration by Time, Chi et al. 2000).",
+    "Relative Peak Speed": "log(peak |v| / extent), 1/s. Time: urgency, the extent covered per second "
+                           "(Samadani et al. 2013 rate Time by velocity and acceleration).",
+    "Relative Mean Speed": "log(mean |v| / extent) while moving, 1/s. Time (as above).",
+    "Speed Change Rate": "log(RMS |a| / RMS |v|), 1/s: how fast speed changes. Time: Sudden has large "
+                         "accelerations (Samadani et al. 2013: Time = acceleration magnitude; Fdili "
+                         "Alaoui et al. 2017: Sudden = acceleration peaks).",
+    "Jerk Rate": "log(RMS |j| / RMS |a|), 1/s. Time: Sudden movement is impulsive, its jerk high "
+                 "(thesis §4.3; Fdili Alaoui et al. 2017 compute Time from jerk).",
+    "Onset Time": "log s from the start of the movement to half its peak speed. Time: the impulse at "
+                  "the start of a Sudden movement (thesis §4.3; EMOTE's inflection time t_i).",
+    "Peak Stroke Width": "log s around the fastest moment that the speed stays above half its peak. "
+                         "Time: a Sudden stroke is brief whatever else the take holds (EMOTE times each "
+                         "stroke; thesis §5.4.3 Time shortens the execution stroke).",
+    "Peak Rise Time": "log s from the last rest (speed under 20 % of the peak) before the fastest moment "
+                      "to it. Time: the impulse of a Sudden stroke (thesis §4.3; EMOTE's t_i).",
+    "Peak Fall Time": "log s from the fastest moment to the next rest. Time (brief), and Weight: a "
+                      "Strong stroke stops short (impact), a Light one lands softly.",
+    "Peak Energy Ratio": "log(max |v|² / mean |v|²) while moving. Weight: Strong concentrates kinetic "
+                         "energy in a peak (Samadani et al. 2013 and Fdili Alaoui et al. 2017 take "
+                         "Weight as the peak kinetic energy; relative to the mean it is size-free).",
+    "Peak Accel Ratio": "log(max |a| / mean |a|). Weight: Strong exerts force in bursts; Light keeps "
+                        "acceleration low and even (Bernstein et al. 2015: Strong = high peak "
+                        "acceleration; force = mass × acceleration).",
+    "Peak Jerk Ratio": "log(max |j| / mean |j|). Weight: the impulsive change of force of a Strong "
+                       "stroke (Bernstein et al. 2015; Larboulette & Gibet 2015, jerk as impact).",
+    "Impact": "log(largest deceleration / mean |d|v|/dt|). Weight: a Strong stroke ends in an impact, "
+              "a sharp stop (Laban 1947; EMOTE's overshoot v1 for Strong; Larboulette & Gibet 2015).",
+    "Stop Sharpness": "log(largest deceleration / largest acceleration) of the speed. Weight: Strong "
+                      "brakes harder than it starts; Light lands softly (buoyant; Laban & Lawrence "
+                      "1947).",
+    "Speed Variation": "std |v| / mean |v| while moving. Weight: Light is delicate and even; Strong "
+                       "varies speed with force (thesis §5.4.3 Weight amplifies speed variations).",
+    "Energy Spread": "share of ∫|v|² dt spent in the busiest fifth of the time. Weight: Strong "
+                     "concentrates energy, Light spreads it (Samadani et al. 2013; Fdili Alaoui 2017).",
+    "Accel Quantile Ratio": "log(95th percentile |a| / median |a|). Weight: acceleration peaks against "
+                            "the movement's own typical acceleration (robust to a lone outlier).",
+    "Light Glide": "log(RMS |a| · active duration / RMS |v|): acceleration relative to speed, the "
+                   "movement's own time-scale removed. Weight: Light is buoyant, low acceleration "
+                   "for its speed (Laban & Lawrence 1947; Chi et al. 2000).",
+    "Stroke Rate": "log(1 + strokes per second): speed peaks above 30 % of the largest, apart from "
+                   "each other. Time (Sudden repeats quick strokes) and Weight (Strong phrases "
+                   "accents; Fdili Alaoui et al. 2017).",
+}
+"""Each Effort feature and its justification. The sources:
+Laban & Lawrence (1947) Effort; Chi, Costa, Zhao & Badler (2000) "The EMOTE model for effort
+and shape", SIGGRAPH; Samadani, Burton, Gorbet & Kulić (2013) "Laban effort and shape
+analysis of affective hand and arm movements", ACII; Bernstein, Shafir, Tsachor, Studd &
+Schuster (2015) "Multitask learning for Laban movement analysis", MOCO; Larboulette & Gibet
+(2015) "A review of computable expressive descriptors of human motion", MOCO; Fdili Alaoui,
+Françoise, Schiphorst, Studd & Bevilacqua (2017) "Seeing, sensing and recognizing Laban
+movement qualities", CHI."""
+
+EFFORT_NAMES: tuple[str, ...] = tuple(EFFORT_SOURCES)
+
+
+def effort_signal(t: np.ndarray, p: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, float]:
+    """The segment on the fixed grid: ``(grid, v, a, j, dt)`` — velocity, acceleration and jerk
+    (n, 3) of the cubic spline through ``p`` low-passed by the EFFORT_SIGMA Gaussian."""
+    from scipy.interpolate import CubicSpline
+    from scipy.ndimage import gaussian_filter1d
+
+    t = np.asarray(t, float).ravel()
+    p = np.asarray(p, float).reshape(-1, 3)
+    duration = float(t[-1] - t[0])
+    n = max(MIN_SAMPLES, int(round(duration * EFFORT_RATE)) + 1)
+    grid = np.linspace(t[0], t[-1], n)
+    dt = duration / (n - 1)
+    x = CubicSpline(t, p, axis=0, bc_type="natural")(grid) if len(t) >= 4 else _resample(t, grid, p)
+    x = gaussian_filter1d(x - x[0], EFFORT_SIGMA / dt, axis=0, mode="nearest")
+    # central differences of the smoothed signal (scipy's derivative-of-Gaussian kernels are
+    # truncated and leak a constant offset into the acceleration); at 120 Hz they are within
+    # 1 % of the exact derivatives of anything the low-pass lets through
+    v = np.gradient(x, dt, axis=0)
+    a = np.gradient(v, dt, axis=0)
+    j = np.gradient(a, dt, axis=0)
+    return grid, v, a, j, dt
+
+
+def _strokes(speed: np.ndarray) -> int:
+    """Speed peaks of at least STROKE_FLOOR of the largest that stand out by a prominence of
+    STROKE_DIP of it (a dip between strokes, not a wobble)."""
+    from scipy.signal import find_peaks
+
+    top = float(speed.max())
+    padded = np.concatenate([[0.0], speed, [0.0]])  # a movement starting or ending fast still peaks
+    peaks, _ = find_peaks(padded, height=STROKE_FLOOR * top, prominence=STROKE_DIP * STROKE_FLOOR * top)
+    return max(len(peaks), 1)
+
+
+def effort_features(t: np.ndarray, p: np.ndarray) -> np.ndarray:
+    """The (len(EFFORT_NAMES),) Effort features of a segment, all finite; unchanged by a
+    uniform scaling of ``p``, a translation or rotation, and the sampling rate (30–144 Hz)."""
+    t = np.asarray(t, float).ravel()
+    p = np.asarray(p, float).reshape(-1, 3)
+    if len(t) < 2 or not t[-1] > t[0]:
+        return np.zeros(len(EFFORT_NAMES))
+    grid, v, a, j, dt = effort_signal(t, p)
+    speed, acc, jerk = _norm(v), _norm(a), _norm(j)
+    top = float(speed.max())
+    if top <= TINY:
+        return np.zeros(len(EFFORT_NAMES))
+    moving = np.flatnonzero(speed >= ACTIVE * top)
+    lo, hi = int(moving[0]), int(moving[-1]) + 1
+    if hi - lo < 3:
+        lo, hi = max(0, lo - 1), min(len(speed), hi + 1)
+    sp, ac, je = speed[lo:hi], acc[lo:hi], jerk[lo:hi]
+    x = _resample(t, grid[lo:hi], p) if len(t) < 4 else None
+    from scipy.interpolate import CubicSpline
+
+    pts = x if x is not None else CubicSpline(t, p, axis=0, bc_type="natural")(grid[lo:hi])
+    extent = max(2.0 * float(np.max(_norm(pts - pts.mean(axis=0)))), TINY)
+    active = (hi - lo) * dt
+    tangential = np.gradient(sp, dt) if len(sp) > 1 else np.zeros(1)
+    mean_tan = max(float(np.abs(tangential).mean()), TINY)
+    rms_v, rms_a = float(np.sqrt(np.mean(sp**2))), float(np.sqrt(np.mean(ac**2)))
+    rms_j = float(np.sqrt(np.mean(je**2)))
+    onset = int(np.argmax(sp >= 0.5 * top))
+    k = int(np.argmax(sp))
+    above = sp >= 0.5 * top
+    left = k - (int(np.argmin(above[k::-1])) if not above[k::-1].all() else k + 1) + 1
+    right = k + (int(np.argmin(above[k:])) if not above[k:].all() else len(sp) - k)
+    rest = sp <= 0.2 * top
+    rise = k - (k - int(np.argmax(rest[k::-1])) if rest[: k + 1].any() else 0)
+    fall = (int(np.argmax(rest[k:])) if rest[k:].any() else len(sp) - 1 - k)
+    energy = np.sort(sp**2)[::-1]
+    busiest = max(1, int(round(0.2 * len(energy))))
+    eps = 1e-12
+    feats = [
+        math.log(active),
+        math.log(top / extent),
+        math.log(float(sp.mean()) / extent + eps),
+        math.log(rms_a / rms_v + eps),
+        math.log(rms_j / max(rms_a, eps) + eps),
+        math.log(max(onset * dt, dt)),
+        math.log(max(right - left, 1) * dt),
+        math.log(max(rise, 1) * dt),
+        math.log(max(fall, 1) * dt),
+        math.log(top**2 / float(np.mean(sp**2))),
+        math.log(float(ac.max()) / max(float(ac.mean()), eps) + eps),
+        math.log(float(je.max()) / max(float(je.mean()), eps) + eps),
+        math.log(max(float(-tangential.min()), eps) / mean_tan + eps),
+        math.log((max(float(-tangential.min()), eps) + eps) / (max(float(tangential.max()), eps) + eps)),
+        float(sp.std() / sp.mean()),
+        float(energy[:busiest].sum() / energy.sum()),
+        math.log((float(np.percentile(ac, 95)) + eps) / (float(np.median(ac)) + eps)),
+        math.log(rms_a * active / rms_v + eps),
+        math.log1p(_strokes(sp) / active),
+    ]
+    return np.nan_to_num(np.array(feats, float), nan=0.0, posinf=50.0, neginf=-50.0)

@@ -4,10 +4,12 @@ header — never a pickle. The shipped default lives beside this module
 
 Arrays: ``nb_<factor>_{features,lo,hi,means,variances}`` for the three Naive Bayes
 classifiers, ``drive_*`` and ``element_*`` for the two HMM sets
-(``start, transitions, means, variances, centre, scale``); ``meta`` holds the JSON header:
-format name and version, the HMM labels, feature sets and points, the summary feature names
-the columns refer to, the temperature and threshold of the confidences, and how it was
-trained.
+(``start, transitions, means, variances, centre, scale``), ``factor_<time|weight>_*`` for the
+calibrated Time and Weight classifiers that decide the qualities applied
+(``centre, scale, coef`` over the Effort features, ``bias`` and ``temperature`` single
+numbers; :mod:`laban.factors`); ``meta`` holds the JSON header: format name and version, the
+HMM labels, feature sets and points, the summary and Effort feature names the columns refer
+to, the HMM temperature, the abstention threshold, and how it was trained.
 """
 
 from __future__ import annotations
@@ -24,13 +26,16 @@ from doodle.core.files import atomic_write
 from doodle.core.npz import read_npz
 from laban.bayes import Binary
 from laban.efforts import DRIVES, ELEMENTS, FACTORS
-from laban.features import FEATURE_SETS, SUMMARY_NAMES
+from laban.factors import Logistic
+from laban.features import EFFORT_NAMES, FEATURE_SETS, SUMMARY_NAMES
 from laban.hmm import HMMSet
 
-FORMAT, VERSION = "doodle-laban-model", 1
+FORMAT, VERSION = "doodle-laban-model", 2
 DEFAULT = Path(__file__).resolve().parent / "models" / "default.npz"
 HMM_FIELDS = ("start", "transitions", "means", "variances", "centre", "scale")
 NB_FIELDS = ("features", "lo", "hi", "means", "variances")
+FACTOR_FIELDS = ("centre", "scale", "coef", "bias", "temperature")
+DECIDED = ("time", "weight")  # the Factors whose qualities are applied (thesis §4.4.3)
 # What a model's numbers may be: HMM features are on a signed log scale and Naive Bayes ones
 # scaled to [0, 1] (a few units either way), the bounds of raw summary features within
 # RAW_LIMIT; these bounds only keep a corrupt file from overflowing the scoring (squares,
@@ -54,6 +59,7 @@ class EffortModel:
     temperature: float = 1.0  # divides HMM log-likelihoods before the softmax (calibrated)
     threshold: float = 0.6  # a quality under this confidence is left neutral
     info: dict = field(default_factory=dict)
+    factors: dict = field(default_factory=dict)  # "time", "weight" → laban.factors.Logistic
 
 
 def save(model: EffortModel, path) -> Path:
@@ -65,9 +71,13 @@ def save(model: EffortModel, path) -> Path:
     for prefix, hs in (("drive", model.drives), ("element", model.elements)):
         for name in HMM_FIELDS:
             arrays[f"{prefix}_{name}"] = np.asarray(getattr(hs, name), dtype=float)
+    for factor in DECIDED:
+        for name in FACTOR_FIELDS:
+            arrays[f"factor_{factor}_{name}"] = np.asarray(getattr(model.factors[factor], name), dtype=float)
     meta = {"format": FORMAT, "version": VERSION, "drive_labels": list(model.drives.labels),
             "element_labels": list(model.elements.labels), "sets": list(model.sets), "points": model.points,
-            "summary_names": list(SUMMARY_NAMES), "factors": list(model.bayes), "temperature": model.temperature,
+            "summary_names": list(SUMMARY_NAMES), "effort_names": list(EFFORT_NAMES), "factors": list(model.bayes),
+            "temperature": model.temperature,
             "threshold": model.threshold, "info": model.info}
     arrays["meta"] = np.array(json.dumps(meta))
     buf = io.BytesIO()
@@ -91,8 +101,9 @@ def load(path=None) -> EffortModel:
     width = sum(len(FEATURE_SETS[s]) for s in sets)
     bayes = {factor: _bayes(arrays, factor, where) for factor in meta["factors"]}
     hmms = [_hmms(arrays, prefix, meta[f"{prefix}_labels"], width, where) for prefix in ("drive", "element")]
+    factors = {factor: _factor(arrays, factor, where) for factor in DECIDED}
     return EffortModel(bayes, hmms[0], hmms[1], sets, meta["points"], meta["temperature"], meta["threshold"],
-                       meta["info"])
+                       meta["info"], factors)
 
 
 def _meta(arrays: dict, where: str) -> dict:
@@ -112,6 +123,8 @@ def _meta(arrays: dict, where: str) -> dict:
         raise DoodleError(f"{where}: model version {meta.get('version')!r}; this program reads version {VERSION}")
     if meta.get("summary_names") != list(SUMMARY_NAMES):
         raise DoodleError(f"{where}: made with other summary features than this program computes; retrain it")
+    if meta.get("effort_names") != list(EFFORT_NAMES):
+        raise DoodleError(f"{where}: made with other Effort features than this program computes; retrain it")
     sets = meta.get("sets")
     if not _strings(sets) or not sets or not set(sets) <= set(FEATURE_SETS) or len(set(sets)) != len(sets):
         raise DoodleError(f"{where}: 'sets' must name feature sets among {sorted(FEATURE_SETS)}, got {sets!r}")
@@ -186,3 +199,13 @@ def _hmms(arrays: dict, prefix: str, labels: tuple, width: int, where: str) -> H
     centre = _array(arrays, f"{prefix}_centre", (width,), where)
     scale = _array(arrays, f"{prefix}_scale", (width,), where, MIN_VARIANCE, LIMIT)
     return HMMSet(labels, start, A, mu, var, centre, scale)
+
+
+def _factor(arrays: dict, factor: str, where: str) -> Logistic:
+    """One Factor's calibrated logistic classifier over the Effort features."""
+    d = len(EFFORT_NAMES)
+    centre, coef = (_array(arrays, f"factor_{factor}_{n}", (d,), where) for n in ("centre", "coef"))
+    scale = _array(arrays, f"factor_{factor}_scale", (d,), where, MIN_SPAN, LIMIT)
+    bias = _array(arrays, f"factor_{factor}_bias", (), where)
+    temperature = _array(arrays, f"factor_{factor}_temperature", (), where, 1e-3, 1e3)
+    return Logistic(centre, scale, coef, float(bias), float(temperature))

@@ -6,6 +6,10 @@
   **sub-sampling ×16** (§4.4.2): 16 random subsets of its samples (50–90 % kept, in order,
   the ends always kept), each becoming one 512-point feature sequence — the features see
   other sampling instants and other noise, the movement stays the same.
+* Time and Weight (the qualities applied): calibrated logistic classifiers on the size- and
+  rate-free Effort features (:mod:`laban.factors`), trained on the labelled curves and on any
+  further effort-labelled paths given (``extra``: effort applied to real motion capture by
+  other procedures, :mod:`laban.procedures`), each presented at several sizes and rates.
 * Temperature: the Drive posterior's temperature is fitted on held-out curves by
   minimising their negative log-likelihood (temperature scaling: Guo, Pleiss, Sun &
   Weinberger 2017, "On calibration of modern neural networks", ICML), so confidences mean
@@ -19,16 +23,19 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import minimize_scalar
 
+from laban import factors as factor_models
 from laban.bayes import fit_binary, select
-from laban.classify import bayes_drive, element_drive
+from laban.classify import bayes_drive, element_drive, quality
 from laban.efforts import DRIVES, ELEMENTS, FACTORS, STATES, element, state_of
 from laban.features import sequence, summary
 from laban.hmm import HMMSet, fit_set
 from laban.models import EffortModel
+from laban.procedures import Effortful
 
 SETS = ("euclidean", "affine", "moving")
 POINTS = 512
 AUGMENT = 16
+THRESHOLD = 0.6  # a Time or Weight under this confidence is left neutral
 
 
 @dataclass(frozen=True, eq=False)
@@ -67,11 +74,24 @@ def _sequences(curves, sets, points, augment: int, seed: int, progress=None) -> 
     return seqs, labels
 
 
+def effortful(curves: list[Labelled], source: str = "generator") -> list[Effortful]:
+    """Labelled curves as Time / Weight labelled paths."""
+    return [Effortful(c.t, c.p, c.q, DRIVES[c.drive][1], DRIVES[c.drive][2], source, c.group) for c in curves]
+
+
+def train_factors(items: list[Effortful], copies: int = 2, seed: int = 0) -> dict:
+    """The calibrated Time and Weight classifiers (:mod:`laban.factors`) of effort-labelled
+    paths, each presented ``copies`` times at a random size and rate."""
+    X, yt, yw, groups = factor_models.features(items, np.random.default_rng([seed, 21]), copies)
+    return factor_models.fit_factors(X, yt, yw, groups, seed=seed)
+
+
 def train(curves: list[Labelled], held_out: list[Labelled] | None = None, sets=SETS, points: int = POINTS,
-          augment: int = AUGMENT, iterations: int = 5, threshold: float = 0.6, seed: int = 0,
-          progress=None, info: dict | None = None) -> EffortModel:
+          augment: int = AUGMENT, iterations: int = 5, threshold: float = THRESHOLD, seed: int = 0,
+          progress=None, info: dict | None = None, extra: list[Effortful] = (), copies: int = 2) -> EffortModel:
     """All classifiers of :class:`EffortModel` from labelled ``curves``; ``held_out`` curves
-    (other performers) calibrate the temperature (1 without them)."""
+    (other performers) calibrate the HMM temperature (1 without them); the Time and Weight
+    classifiers learn from ``curves`` and the effort-labelled paths ``extra``."""
     unknown = sorted({c.drive for c in curves} - set(DRIVES))
     if unknown:
         raise ValueError(f"unknown Drive label(s) {unknown}; Drives are {sorted(DRIVES)}")
@@ -98,7 +118,10 @@ def train(curves: list[Labelled], held_out: list[Labelled] | None = None, sets=S
     element_hmms = fit_set(elements, element_seqs, element_labels, iterations,
                            lambda i, n: step("element HMMs", i, n))
     temperature = calibrate(drive_hmms, held_out, sets, points) if held_out else 1.0
-    return EffortModel(bayes, drive_hmms, element_hmms, tuple(sets), points, temperature, threshold, info or {})
+    decided = train_factors(effortful(curves) + list(extra), copies, seed)
+    step("Time and Weight", 1, 1)
+    return EffortModel(bayes, drive_hmms, element_hmms, tuple(sets), points, temperature, threshold, info or {},
+                       decided)
 
 
 def calibrate(hmms: HMMSet, curves: list[Labelled], sets=SETS, points: int = POINTS) -> float:
@@ -118,14 +141,18 @@ def calibrate(hmms: HMMSet, curves: list[Labelled], sets=SETS, points: int = POI
 
 def evaluate(model: EffortModel, curves: list[Labelled]) -> dict:
     """Accuracy per Factor, State (Time + Weight) and Drive, and Drive/State confusion
-    matrices, for the Naive Bayes, Drive HMM and Element HMM methods on ``curves``."""
+    matrices, for the decisions applied (``effort``: the Time and Weight classifiers, Space
+    by the Drive HMM) and the Naive Bayes, Drive HMM and Element HMM methods on ``curves``."""
     truth = [c.drive for c in curves]
     seqs = [sequence(c.t, c.p, c.q, model.sets, model.points) for c in curves]
     X = np.array([summary(c.t, c.p, c.q) for c in curves])
     labels = model.drives.labels
+    hmm = [labels[int(np.argmax(model.drives.log_likelihoods(s)))] for s in seqs]
+    applied = [quality(model, c.t, c.p, c.q).drive for c in curves]
     predictions = {
+        "effort": [a or h for a, h in zip(applied, hmm)],
         "naive_bayes": bayes_drive(model, X),
-        "drive_hmm": [labels[int(np.argmax(model.drives.log_likelihoods(s)))] for s in seqs],
+        "drive_hmm": hmm,
         "element_hmm": [element_drive(model, s) for s in seqs],
     }
     report = {"curves": len(curves), "methods": {}}

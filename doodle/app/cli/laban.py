@@ -24,6 +24,8 @@ def add_parser(sub) -> None:
     q = lsub.add_parser("train", help="train effort models from labelled doodles and/or generated curves")
     q.add_argument("files", nargs="*", help="labelled doodle files (header x-drive) or folders of them")
     q.add_argument("--synthetic", action="store_true", help="add the generated curves the default model uses")
+    q.add_argument("--mocap", metavar="DIR", help="add effort applied to the neutral motion capture clips "
+                   "(*_normal_*.bvh) under DIR by the EMOTE-style and stylisation procedures, as the default model")
     q.add_argument("-o", "--output", required=True, metavar="MODEL.npz")
     q.add_argument("--overwrite", action="store_true", help="replace MODEL.npz if it exists")
     q.add_argument("--augment", type=int, default=16, help="sub-sampled copies per training curve (default 16)")
@@ -39,6 +41,10 @@ def add_parser(sub) -> None:
                    help=f"folder for report.json and the confusion PNGs, replaced together (default {DEFAULT_EVAL_DIR})")
     q.add_argument("--track", default="c0")
     q.add_argument("--people", type=int, default=3, help="generated held-out performers (default 3)")
+    q.add_argument("--mocap", metavar="DIR",
+                   help="neutral motion capture for the cross-procedure tables (default, when no files are given: "
+                        "the Bandai clips beside the project, if present)")
+    q.add_argument("--no-cross", action="store_true", help="skip the cross-procedure tables (they take minutes)")
     q.add_argument("--json", action="store_true", help="print the report as JSON")
     q.set_defaults(run=cmd_eval)
 
@@ -121,9 +127,13 @@ def cmd_train(args) -> int:
         held = generated("calibrate")
     if not curves:
         raise DoodleError("nothing to train on: give labelled doodle files or --synthetic")
-    info = {"files": [str(f) for f in args.files], "synthetic": DEFAULT_DATA if args.synthetic else None}
+    extra = _mocap_items(args.mocap) if args.mocap else []
+    info = {"files": [str(f) for f in args.files], "synthetic": DEFAULT_DATA if args.synthetic else None,
+            "mocap": {"clips": sorted({e.group for e in extra}), "paths": len(extra),
+                      "procedures": sorted({e.source for e in extra})} if extra else None}
     try:
-        model = train(curves, held or None, sets=sets, augment=args.augment, progress=progress_bar(), info=info)
+        model = train(curves, held or None, sets=sets, augment=args.augment, progress=progress_bar(), info=info,
+                      extra=extra)
     except ValueError as e:
         raise DoodleError(str(e)) from None
     save(model, args.output)
@@ -132,11 +142,25 @@ def cmd_train(args) -> int:
     return 0
 
 
+def _mocap_items(folder) -> list:
+    """Effort applied to the neutral clips under ``folder`` by both real-motion procedures."""
+    from doodle.app.effort_corpus import emote_items, neutral_clips, stylize_items
+
+    if not Path(folder).is_dir():
+        raise DoodleError(f"{folder}: no such folder (--mocap)")
+    clips = neutral_clips(folder)
+    if not clips:
+        raise DoodleError(f"{folder}: no neutral motion capture clips (*/*_normal_*.bvh)")
+    print(f"{len(clips)} neutral clips: applying effort (EMOTE-style timing and the stylisation operators)",
+          file=sys.stderr)
+    return emote_items(clips) + stylize_items(clips)
+
+
 def cmd_eval(args) -> int:
     from doodle.core.files import atomic_files, atomic_write, check_dir
     from laban.models import load as load_model
     from laban.efforts import DRIVES, STATES
-    from laban.report import confusion_png
+    from laban.report import confusion_png, reliability_png
     from laban.train import evaluate, generated
 
     out = check_dir(args.output)
@@ -146,6 +170,9 @@ def cmd_eval(args) -> int:
     curves = labelled(args.files, args.track) if args.files else generated("test", people=args.people)
     report = evaluate(model, curves)
     report["data"] = [str(f) for f in args.files] or "generated held-out performers (laban.train.DEFAULT_DATA['test'])"
+    cross = _cross(args)
+    if cross is not None:
+        report["cross_procedure"] = cross
     pictures = []
     with atomic_files() as staged:  # the pictures and report.json together, or none
         for method, r in report["methods"].items():
@@ -153,6 +180,13 @@ def cmd_eval(args) -> int:
                                                 ("states", "state_confusion", STATES, "States (Time + Weight)")):
                 pictures.append(str(out / f"{method}_{kind}.png"))
                 confusion_png(r[matrix], list(labels), staged(pictures[-1]), f"{method}: {title}")
+        if cross is not None:
+            for group, matrix in cross["state_confusion"].items():
+                name = group.replace(" → ", "_to_").replace(" ", "_")
+                pictures.append(str(out / f"cross_{name}_states.png"))
+                confusion_png(matrix, list(STATES), staged(pictures[-1]), f"cross-procedure {group}: States")
+            pictures.append(str(out / "reliability.png"))
+            reliability_png(cross["reliability"], staged(pictures[-1]))
         report["pictures"] = pictures
         atomic_write(staged(out / "report.json"), [json.dumps(report, indent=2) + "\n"])
     if args.json:
@@ -162,8 +196,38 @@ def cmd_eval(args) -> int:
     print(f"  {'method':<12} {'space':>6} {'time':>6} {'weight':>6} {'state':>6} {'drive':>6}")
     for method, r in report["methods"].items():
         print(f"  {method:<12} " + " ".join(f"{r[k]:6.3f}" for k in ("space", "time", "weight", "state", "drive")))
+    if cross is not None:
+        from doodle.app.effort_corpus import table
+
+        print("\n".join(table(cross)))
+        rel = cross["reliability"]
+        print(f"  calibration (cross-procedure runs): expected calibration error Time {rel['time']['ece']:.3f}, "
+              f"Weight {rel['weight']['ece']:.3f}")
     print(f"{out / 'report.json'}; confusion matrices: {', '.join(pictures)}")
     return 0
+
+
+def _cross(args) -> dict | None:
+    """The cross-procedure evaluation, compact for report.json (per-curve probabilities
+    folded into State confusion matrices and the reliability table), or None when skipped."""
+    from doodle.app.effort_corpus import MOCAP, cross_procedure, reliability, state_confusion
+
+    if args.no_cross or (args.files and not args.mocap):
+        return None
+    folder = Path(args.mocap) if args.mocap else MOCAP
+    if not folder.is_dir():
+        if args.mocap:
+            raise DoodleError(f"{folder}: no such folder (--mocap)")
+        print(f"cross-procedure tables skipped: no motion capture at {folder} (--mocap DIR)", file=sys.stderr)
+        return None
+    rep = cross_procedure(folder, progress=lambda text: print(text, file=sys.stderr, flush=True))
+    rep["reliability"] = reliability(rep)
+    rep["state_confusion"] = state_confusion(rep)
+    for run in rep["runs"]:
+        for cell in run["cells"].values():
+            for key in ("p_sudden", "p_strong", "truth_time", "truth_weight"):
+                cell.pop(key)
+    return rep
 
 
 def cmd_classify(args) -> int:

@@ -1,0 +1,278 @@
+"""Effort-labelled paths grounded in real movement, and the cross-procedure evaluation.
+
+Real neutral movement: the ``*_normal_*`` clips of the Bandai Namco motion dataset (read, never
+copied: ``--mocap DIR``). Each clip gives up to three paths — right hand, left hand and root
+(pelvis) — that move at least :data:`REACH` at the performer's scale. Effort is applied to
+them by two independent procedures:
+
+* ``emote`` — the EMOTE-style timing of :mod:`laban.procedures` on each path;
+* ``stylize`` — the thesis's stylisation operators (§5.4, ``retarget.stylize``) on the whole
+  skeleton (Time: stage retiming and motion scales; Weight: motion scale, speed-variation
+  retiming and shape), the paths read back by forward kinematics.
+
+Each path gets every Time × Weight State, ``variants`` times at a random strength 0.6–1.
+
+Cross-procedure protocol (:func:`cross_procedure`): a model is trained on the generator
+(:mod:`laban.synth`) and ONE procedure applied to the clips of one half of the data, and
+tested on the OTHER procedure applied to the clips of the other half — both ways, both
+halves: never tested on a procedure, nor on a neutral clip, it was trained on. A model
+trained on the generator alone is tested on both procedures beside it. Test paths are
+presented at a figurine's size (×0.15) and the performer's own (×1), tracked at 30, 60, 90
+and 144 Hz with clock jitter and absolute tracking noise (:func:`laban.procedures.presented`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from laban.procedures import RATES, Effortful, emote, presented
+
+MOCAP = Path(__file__).resolve().parents[2].parent / "shared" / "data" / "mocap" / "bandai"
+REACH = 0.25  # m: a path that moves less than this (box diagonal, performer's scale) is not used
+PATHS = ("right_hand", "left_hand", "pelvis")
+SCALES = {"figurine ×0.15": 0.15, "human ×1": 1.0}
+STATES = ((1, 1), (1, -1), (-1, 1), (-1, -1))  # (time, weight): Sudden Strong … Sustained Light
+THESIS = {"time": "> 0.85 (Drive HMM)", "weight": "NB single factors ≥ 0.74", "state": "0.63 (HMM States)"}
+
+
+@dataclass(frozen=True, eq=False)
+class Clip:
+    """A neutral clip: its name, which half it is in (the dataset it comes from), the motion
+    and its stages, and its paths by role, each ``(t, p, q)``."""
+
+    name: str
+    half: str
+    motion: object
+    stages: object
+    paths: dict
+
+
+def neutral_clips(root=None) -> list[Clip]:
+    """The neutral (``normal``) clips under ``root`` (default :data:`MOCAP`), sorted by name."""
+    from retarget.analysis import guess_roles, stages
+    from retarget.bvh import read_bvh
+
+    root = Path(root) if root else MOCAP
+    files = sorted(root.glob("*/*_normal_*.bvh"))
+    clips = []
+    for f in files:
+        motion = read_bvh(f)
+        roles = guess_roles(motion.skeleton)
+        paths = _paths(motion, roles)
+        if paths:
+            clips.append(Clip(f.stem, f.parent.name, motion, stages(motion), paths))
+    return clips
+
+
+def _paths(motion, roles: dict) -> dict:
+    from retarget.skeleton import forward_kinematics
+
+    pos, rot = forward_kinematics(motion)
+    t = np.arange(motion.frames) * motion.frame_time
+    out = {}
+    for role in PATHS:
+        if role in roles:
+            p = pos[:, roles[role]]
+            if float(np.linalg.norm(np.ptp(p, axis=0))) >= REACH:
+                out[role] = (t, p, rot[:, roles[role]])
+    return out
+
+
+def emote_items(clips: list[Clip], seed: int = 0, variants: int = 2) -> list[Effortful]:
+    """Every path of every clip in every State by the EMOTE-style timing."""
+    items = []
+    for c, clip in enumerate(clips):
+        for role, (t, p, q) in clip.paths.items():
+            for s, (lt, lw) in enumerate(STATES):
+                for v in range(variants):
+                    rng = np.random.default_rng([seed, c, PATHS.index(role), s, v, 1])
+                    tt, pp, qq = emote(t, p, q, lt, lw, rng, strength=float(rng.uniform(0.6, 1.0)))
+                    items.append(Effortful(tt, pp, qq, lt, lw, "emote", clip.name))
+    return items
+
+
+def stylize_items(clips: list[Clip], seed: int = 0, variants: int = 2) -> list[Effortful]:
+    """Every clip in every State by the thesis's stylisation operators; the path read back
+    is the acting hand or foot's — the most moving one, whose execution stroke the Time
+    modifier retimes (§5.4.3) — for the other paths carry the effort only incidentally."""
+    from retarget.effort_signature import most_moving
+    from retarget.skeleton import forward_kinematics
+    from retarget.stylize import stylize_staged
+
+    items = []
+    for c, clip in enumerate(clips):
+        j = most_moving(clip.motion)
+        for s, (lt, lw) in enumerate(STATES):
+            for v in range(variants):
+                rng = np.random.default_rng([seed, c, s, v, 2])
+                k = float(rng.uniform(0.6, 1.0))
+                out, _ = stylize_staged(clip.motion, clip.stages, lt * k, lw * k)
+                pos, rot = forward_kinematics(out)
+                t = np.arange(out.frames) * out.frame_time
+                items.append(Effortful(t, pos[:, j], rot[:, j], lt, lw, "stylize", clip.name))
+    return items
+
+
+def generator_items(part: str = "train", **overrides) -> list[Effortful]:
+    """The generator's curves (:mod:`laban.synth`) as Time / Weight labelled paths."""
+    from laban.train import effortful, generated
+
+    return effortful(generated(part, **overrides))
+
+
+def decide(model_factors: dict, X: np.ndarray, threshold: float) -> dict:
+    """Probabilities, decisions and abstentions of the Time and Weight classifiers on rows X."""
+    out = {}
+    for factor in ("time", "weight"):
+        p = model_factors[factor].probability(X)
+        out[factor] = {"p": p, "sign": np.where(p >= 0.5, 1, -1), "abstain": np.maximum(p, 1 - p) < threshold}
+    return out
+
+
+def score_cell(model_factors: dict, items: list[Effortful], scale: float, rate: float, threshold: float,
+               seed: int) -> dict:
+    """Time, Weight and State accuracy of ``items`` presented at ``scale`` and ``rate``, with
+    abstentions (confidence under ``threshold``) and the probabilities behind each decision."""
+    from laban.features import effort_features
+
+    rng = np.random.default_rng([seed, int(rate), int(scale * 1000)])
+    X = np.array([effort_features(*presented(it.t, it.p, it.q, scale, rate, rng)[:2]) for it in items])
+    d = decide(model_factors, X, threshold)
+    yt, yw = np.array([it.time for it in items]), np.array([it.weight for it in items])
+    ok_t, ok_w = d["time"]["sign"] == yt, d["weight"]["sign"] == yw
+    either = d["time"]["abstain"] | d["weight"]["abstain"]
+    decided_t, decided_w = ~d["time"]["abstain"], ~d["weight"]["abstain"]
+    return {
+        "n": len(items), "time": float(ok_t.mean()), "weight": float(ok_w.mean()), "state": float((ok_t & ok_w).mean()),
+        "abstain_time": float(d["time"]["abstain"].mean()), "abstain_weight": float(d["weight"]["abstain"].mean()),
+        "abstain_either": float(either.mean()),
+        "time_decided": float(ok_t[decided_t].mean()) if decided_t.any() else None,
+        "weight_decided": float(ok_w[decided_w].mean()) if decided_w.any() else None,
+        "p_sudden": d["time"]["p"].tolist(), "p_strong": d["weight"]["p"].tolist(),
+        "truth_time": yt.tolist(), "truth_weight": yw.tolist(),
+    }
+
+
+def cross_procedure(root=None, seed: int = 0, variants: int = 2, threshold: float | None = None,
+                    rates=RATES, scales=None, progress=None) -> dict:
+    """The cross-procedure evaluation described in the module docstring: per run, scale and
+    rate, the Time, Weight and State accuracies and abstentions (see :func:`score_cell`)."""
+    from laban.train import THRESHOLD, train_factors
+
+    threshold = THRESHOLD if threshold is None else threshold
+    scales = scales or SCALES
+    say = progress or (lambda text: None)
+    clips = neutral_clips(root)
+    if not clips:
+        raise FileNotFoundError(f"no neutral (*_normal_*.bvh) clips under {Path(root) if root else MOCAP}")
+    halves = sorted({c.half for c in clips})
+    if len(halves) < 2:  # one folder: alternate clips
+        halves = ["even", "odd"]
+        clips = [Clip(c.name, halves[k % 2], c.motion, c.stages, c.paths) for k, c in enumerate(clips)]
+    say(f"{len(clips)} neutral clips, {sum(len(c.paths) for c in clips)} paths; applying effort")
+    by = {}
+    for h in halves[:2]:
+        part = [c for c in clips if c.half == h]
+        by[("emote", h)] = emote_items(part, seed, variants)
+        by[("stylize", h)] = stylize_items(part, seed, variants)
+    generator = generator_items("train")
+    runs = []
+    for train_proc, test_proc in (("emote", "stylize"), ("stylize", "emote")):
+        for a, b in ((halves[0], halves[1]), (halves[1], halves[0])):
+            runs.append((f"generator + {train_proc} ({a}) → {test_proc} ({b})", generator + by[(train_proc, a)],
+                         by[(test_proc, b)], f"{train_proc} → {test_proc}"))
+    both = {p: by[(p, halves[0])] + by[(p, halves[1])] for p in ("emote", "stylize")}
+    runs.append(("generator alone → emote (all)", generator, both["emote"], "generator → emote"))
+    runs.append(("generator alone → stylize (all)", generator, both["stylize"], "generator → stylize"))
+    report = {"clips": [c.name for c in clips], "halves": halves[:2], "threshold": threshold,
+              "scales": dict(scales), "rates": list(rates), "runs": []}
+    for k, (name, train_items, test_items, group) in enumerate(runs):
+        say(f"run {k + 1}/{len(runs)}: {name}: training on {len(train_items)} paths")
+        factors = train_factors(train_items, seed=seed)
+        cells = {}
+        for sname, s in scales.items():
+            for r in rates:
+                cells[f"{sname} @ {r:g} Hz"] = score_cell(factors, test_items, s, r, threshold, seed + k)
+        report["runs"].append({"name": name, "group": group, "train": len(train_items), "test": len(test_items),
+                               "temperature": {f: factors[f].temperature for f in factors}, "cells": cells})
+    report["pooled"] = pooled(report)
+    return report
+
+
+def pooled(report: dict) -> dict:
+    """Per group of runs (``emote → stylize`` …) and cell: accuracies weighted by test size."""
+    out = {}
+    for run in report["runs"]:
+        g = out.setdefault(run["group"], {})
+        for cell, r in run["cells"].items():
+            acc = g.setdefault(cell, {"n": 0, "time": 0.0, "weight": 0.0, "state": 0.0, "abstain_either": 0.0,
+                                      "abstain_time": 0.0, "abstain_weight": 0.0})
+            for key in ("time", "weight", "state", "abstain_either", "abstain_time", "abstain_weight"):
+                acc[key] += r[key] * r["n"]
+            acc["n"] += r["n"]
+    for g in out.values():
+        for acc in g.values():
+            for key in ("time", "weight", "state", "abstain_either", "abstain_time", "abstain_weight"):
+                acc[key] /= max(acc["n"], 1)
+    return out
+
+
+def table(report: dict) -> list[str]:
+    """The pooled cross-procedure tables as text lines, the thesis's figures beside them."""
+    lines = [f"Cross-procedure Effort accuracy (trained on one procedure, tested on the other and on other clips; "
+             f"chance: Time 0.5, Weight 0.5, State 0.25; abstention below confidence {report['threshold']:g})",
+             f"  thesis (recorded performances): Time {THESIS['time']}, {THESIS['weight']}, States {THESIS['state']}"]
+    for group, cells in report["pooled"].items():
+        lines.append(f"  {group}")
+        lines.append(f"    {'scale @ rate':<28} {'n':>5} {'time':>6} {'weight':>6} {'state':>6} {'abstain':>8}")
+        for cell, r in cells.items():
+            lines.append(f"    {cell:<28} {r['n']:5d} {r['time']:6.3f} {r['weight']:6.3f} {r['state']:6.3f} "
+                         f"{r['abstain_either']:8.3f}")
+    return lines
+
+
+def reliability(report: dict, groups=None, bins: int = 10) -> dict:
+    """Reliability of the decisions' confidences, pooled over the cross-procedure runs'
+    cells: per confidence bin, the mean confidence, the share right and the count, for
+    Time and Weight; and the expected calibration error."""
+    out = {}
+    for factor, key, truth in (("time", "p_sudden", "truth_time"), ("weight", "p_strong", "truth_weight")):
+        p, y = [], []
+        for run in report["runs"]:
+            if groups is None and run["group"].startswith("generator"):
+                continue
+            if groups is not None and run["group"] not in groups:
+                continue
+            for r in run["cells"].values():
+                p += r[key]
+                y += r[truth]
+        p, y = np.array(p), np.array(y)
+        conf = np.maximum(p, 1 - p)
+        right = np.where(p >= 0.5, 1, -1) == y
+        edges = np.linspace(0.5, 1.0, bins + 1)
+        idx = np.clip(np.digitize(conf, edges) - 1, 0, bins - 1)
+        rows = [{"low": float(edges[b]), "high": float(edges[b + 1]), "n": int((idx == b).sum()),
+                 "confidence": float(conf[idx == b].mean()) if (idx == b).any() else None,
+                 "accuracy": float(right[idx == b].mean()) if (idx == b).any() else None} for b in range(bins)]
+        ece = float(sum(r["n"] * abs(r["confidence"] - r["accuracy"]) for r in rows if r["n"]) / max(len(p), 1))
+        out[factor] = {"bins": rows, "ece": ece, "n": int(len(p))}
+    return out
+
+
+def state_confusion(report: dict) -> dict:
+    """Per group of cross-procedure runs, the State confusion matrix (rows: truth, in the
+    order of :data:`laban.efforts.STATES`) pooled over every cell."""
+    from laban.efforts import STATES as NAMES, state_of
+
+    out = {}
+    for run in report["runs"]:
+        m = out.setdefault(run["group"], np.zeros((4, 4), int))
+        for r in run["cells"].values():
+            for ps, pw, yt, yw in zip(r["p_sudden"], r["p_strong"], r["truth_time"], r["truth_weight"]):
+                a = NAMES.index(state_of(yt, yw))
+                b = NAMES.index(state_of(1 if ps >= 0.5 else -1, 1 if pw >= 0.5 else -1))
+                m[a, b] += 1
+    return {g: m.tolist() for g, m in out.items()}

@@ -1,0 +1,166 @@
+"""Time and Weight that describe quality, not size or sampling: the Effort features and the
+shipped model's decisions under uniform scaling (×0.1–×10) and tracking rates (30–144 Hz);
+the EMOTE-style procedure; calibration; the Time and Weight classifiers in model files."""
+
+import json
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from doodle.core.errors import DoodleError
+from laban import synth
+from laban.classify import quality
+from laban.factors import Logistic, temperature
+from laban.features import EFFORT_NAMES, EFFORT_SOURCES, effort_features
+from laban.models import load, save
+from laban.procedures import emote, presented
+
+MODEL = load()
+TAKES = synth.dataset(people=1, repeats=1, seed=17, patterns=("circle", "zigzag", "thrust", "lemniscate"))
+
+
+def _take(k):
+    e = TAKES[k % len(TAKES)]
+    return e.t, e.p, e.q
+
+
+def _probabilities(t, p):
+    x = effort_features(t, p)[None]
+    return float(MODEL.factors["time"].probability(x)[0]), float(MODEL.factors["weight"].probability(x)[0])
+
+
+def test_every_feature_has_its_source():
+    assert len(EFFORT_NAMES) == len(set(EFFORT_NAMES)) >= 10
+    for name in EFFORT_NAMES:
+        assert len(EFFORT_SOURCES[name]) > 40, name
+    for factor in ("time", "weight"):
+        assert MODEL.factors[factor].coef.shape == (len(EFFORT_NAMES),)
+
+
+@settings(max_examples=30, deadline=None)
+@given(st.integers(0, 10_000), st.floats(0.1, 10.0))
+def test_uniform_scaling_leaves_the_features_and_the_effort_unchanged(k, s):
+    t, p, q = _take(k)
+    f0, f1 = effort_features(t, p), effort_features(t, s * (p - p[0]) + 3.0)
+    np.testing.assert_allclose(f1, f0, rtol=1e-6, atol=1e-6)
+    e0, e1 = quality(MODEL, t, p, q), quality(MODEL, t, s * (p - p[0]) + p[0], q)
+    if s * np.linalg.norm(np.ptp(p, axis=0)) > 0.05:  # not a still hand at this size
+        assert (e1.time, e1.weight, e1.state) == (e0.time, e0.weight, e0.state)
+
+
+@settings(max_examples=30, deadline=None)
+@given(st.integers(0, 10_000), st.floats(30.0, 144.0), st.floats(0.1, 10.0))
+def test_tracking_rate_and_size_leave_the_effort_unchanged(k, rate, s):
+    """The same movement tracked at 30–144 Hz (jittered clock), at any size: the
+    probabilities move by little, and no confident decision changes."""
+    t, p, q = _take(k)
+    rng = np.random.default_rng(k)
+    ref = _probabilities(*presented(t, p, q, 1.0, 90.0, rng, noise=0.0)[:2])
+    got = _probabilities(*presented(t, p, q, s, rate, rng, noise=0.0)[:2])
+    for a, b in zip(ref, got):
+        assert abs(a - b) < 0.08, (ref, got)
+        if max(a, 1 - a) > 0.65:
+            assert (a >= 0.5) == (b >= 0.5), (ref, got)
+
+
+def test_features_are_finite_for_degenerate_segments():
+    t = np.linspace(0, 1, 50)
+    for p in (np.zeros((50, 3)), np.column_stack([t, t, t]), np.column_stack([t**8, 0 * t, 0 * t])):
+        assert np.isfinite(effort_features(t, p)).all()
+    assert np.isfinite(effort_features(t[:2], np.zeros((2, 3)))).all()
+
+
+def _stroke():
+    t = np.arange(0.0, 2.0, 1 / 30)
+    x = 0.5 * (1 - np.cos(np.pi * np.clip(t - 0.5, 0, 1)))  # rest, one smooth stroke, rest
+    return t, np.column_stack([x, 0.2 * x**2, 0 * t]), np.tile([0, 0, 0, 1.0], (len(t), 1))
+
+
+def test_emote_timing_keeps_the_path_and_changes_its_timing():
+    t, p, q = _stroke()
+    rng = np.random.default_rng(0)
+    sudden = emote(t, p, q, 1, -1, rng)
+    sustained = emote(t, p, q, -1, -1, rng)
+    strong = emote(t, p, q, -1, 1, rng)
+    assert sudden[0][-1] < t[-1] < sustained[0][-1]
+    for tt, pp, qq in (sudden, sustained, strong):
+        assert np.all(np.diff(tt) > 0) and len(tt) == len(pp) == len(qq)
+        np.testing.assert_allclose(pp[0], p[0], atol=1e-9)
+        np.testing.assert_allclose(pp[-1], p[-1], atol=1e-6)
+    assert strong[1][:, 0].max() > p[:, 0].max() + 0.01  # the overshoot past the goal
+    assert strong[1][:, 0].min() < p[:, 0].min() - 0.005  # the anticipation
+    for lw in (1, -1):  # the shipped model: Sudden reads as more Sudden than Sustained, whatever the Weight
+        p_sudden = [_probabilities(*emote(t, p, q, lt, lw, np.random.default_rng(1))[:2])[0] for lt in (1, -1)]
+        assert p_sudden[0] > p_sudden[1] + 0.25 and p_sudden[1] < 0.5, (lw, p_sudden)
+
+
+def test_temperature_scaling_recovers_a_known_temperature():
+    rng = np.random.default_rng(3)
+    logits = rng.normal(0, 3, 20000)
+    y = np.where(rng.random(len(logits)) < 1 / (1 + np.exp(-logits / 2.0)), 1, -1)
+    assert temperature(logits, y) == pytest.approx(2.0, rel=0.05)
+
+
+def test_abstains_when_unsure():
+    t, p, q = _take(0)
+    unsure = Logistic(np.zeros(len(EFFORT_NAMES)), np.ones(len(EFFORT_NAMES)), np.zeros(len(EFFORT_NAMES)), 0.1)
+    from dataclasses import replace
+
+    e = quality(replace(MODEL, factors={"time": unsure, "weight": unsure}), t, p, q)
+    assert e.time == e.weight == 0.0 and 0.5 < e.p_sudden < 0.6 and e.state
+
+
+def test_model_files_check_the_time_and_weight_classifiers(tmp_path):
+    path = save(MODEL, tmp_path / "m.npz")
+    data = dict(np.load(path, allow_pickle=False))
+    for key, value, said in (("factor_time_coef", np.zeros(3), "must be numbers shaped"),
+                             ("factor_weight_temperature", np.array(0.0), "'factor_weight_temperature' holds 0"),
+                             ("factor_time_scale", np.full(len(EFFORT_NAMES), np.nan), "must be finite")):
+        np.savez(tmp_path / "bad.npz", **dict(data, **{key: value}))
+        with pytest.raises(DoodleError, match=said):
+            load(tmp_path / "bad.npz")
+    meta = json.loads(str(data["meta"]))
+    meta["effort_names"] = meta["effort_names"][:-1]
+    np.savez(tmp_path / "names.npz", **dict(data, meta=np.array(json.dumps(meta))))
+    with pytest.raises(DoodleError, match="other Effort features"):
+        load(tmp_path / "names.npz")
+    without = {k: v for k, v in data.items() if k != "factor_weight_bias"}
+    np.savez(tmp_path / "old.npz", **without)
+    with pytest.raises(DoodleError, match="'factor_weight_bias' is missing"):
+        load(tmp_path / "old.npz")
+
+
+def test_cross_procedure_evaluation_on_two_halves(tmp_path, monkeypatch):
+    """The protocol end to end on four clips of the built-in library, two per half: every
+    run is tested on the other procedure and the other half, and the tables, State
+    confusions and reliability come out whole."""
+    import shutil
+    from pathlib import Path
+
+    from doodle.app import effort_corpus as ec
+
+    clips = Path(__file__).resolve().parents[1] / "library" / "builtin" / "clips"
+    for half, names in (("one", ("punch", "greet")), ("two", ("slap", "throw"))):
+        (tmp_path / half).mkdir()
+        for n in names:
+            shutil.copy(clips / f"{n}.bvh", tmp_path / half / f"{half}_{n}_normal_001.bvh")
+    generator = ec.generator_items
+    monkeypatch.setattr(ec, "generator_items", lambda part="train": generator(part, people=1))
+    rep = ec.cross_procedure(tmp_path, variants=1, rates=(30.0,), scales={"human": 1.0})
+    names = [r["name"] for r in rep["runs"]]
+    assert names[0] == "generator + emote (one) → stylize (two)" and len(names) == 6
+    for run in rep["runs"][:4]:
+        train, test = run["name"].split(" → ")
+        assert train.split(" ")[-1].strip("()") != test.split(" ")[-1].strip("()")  # other clips
+        assert train.split(" ")[2] != test.split(" ")[0]  # the other procedure
+        cell = run["cells"]["human @ 30 Hz"]
+        assert 0 <= cell["state"] <= min(cell["time"], cell["weight"]) <= 1 and cell["n"] == run["test"] > 0
+    assert set(rep["pooled"]) == {"emote → stylize", "stylize → emote", "generator → emote", "generator → stylize"}
+    lines = ec.table(rep)
+    assert any("thesis" in line for line in lines) and any("human @ 30 Hz" in line for line in lines)
+    rel = ec.reliability(rep)
+    assert sum(b["n"] for b in rel["time"]["bins"]) == rel["time"]["n"] > 0 and 0 <= rel["weight"]["ece"] <= 0.5
+    conf = ec.state_confusion(rep)
+    assert sum(map(sum, conf["emote → stylize"])) == sum(r["test"] for r in rep["runs"][:2])
