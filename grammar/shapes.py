@@ -411,19 +411,21 @@ class Refiner:
         if len(self._waiting) < 2:  # the next segment decides how far a window may reach
             return False
         after = self._waiting[1]
-        return len(self.tokens) >= (after.stop if after.action in self.shapes.names else first.stop) + REACH
+        if len(self.tokens) < (after.stop if after.action in self.shapes.names else first.stop) + REACH:
+            return False
+        return self._motion(first, len(self.tokens), False) != "pending"  # where its motion ends is known
 
     def close(self) -> list:
         out = []
         while self._waiting:
             after = self._waiting[1] if len(self._waiting) > 1 else None
-            out += self._decide(self._waiting.pop(0), after, len(self.tokens))
+            out += self._decide(self._waiting.pop(0), after, len(self.tokens), closed=True)
         if self._unknown is not None:
             out.append(self._unknown)
             self._unknown = None
         return out
 
-    def _decide(self, seg, after, known: int) -> list:
+    def _decide(self, seg, after, known: int, closed: bool = False) -> list:
         from grammar.matcher import UNKNOWN
 
         first = max(seg.first, self._done)
@@ -440,7 +442,13 @@ class Refiner:
                 ends.append((after.stop - TRIM, after.stop + REACH))
             elif after is not None and after.action == UNKNOWN:
                 ends.append((seg.stop, min(after.stop, seg.stop + UNKNOWN_REACH)))
-            best = self._best(range(max(lowest, seg.first - back), min(seg.stop, seg.first + TRIM + 1)), ends, known)
+            starts = list(range(max(lowest, seg.first - back), min(seg.stop, seg.first + TRIM + 1)))
+            motion = self._motion(seg, known, closed)
+            motion = None if motion == "pending" else motion
+            if motion is not None:  # the whole motion between pauses is a window too
+                starts = sorted(set(starts) | {motion[0]})
+                ends.append((motion[1], motion[1]))
+            best = self._best(starts, ends, known, motion=motion)
         else:
             return self._emit(seg.action, first, seg.stop, seg.exact, seg.distance)
         if best is None:
@@ -453,10 +461,45 @@ class Refiner:
         return (self._emit(UNKNOWN, first, f, False, None) + self._emit(self.shapes.names[k], f, e, edits == 0.0, edits)
                 + self._emit(UNKNOWN, e, seg.stop, False, None))
 
-    def _best(self, starts: range, ends: list, known: int, strict: float = 1.0):
+    def _motion(self, seg, known: int, closed: bool):
+        """The tokens ``(a, b)`` of the motion a shaped segment lies in: from the last pause
+        before it (not reaching back into what is decided, but into a pending unknown run)
+        to the first pause at or after its end — or the end of the track once it is closed;
+        None when that is more than :data:`SPOT_MAX` tokens (no pause bounds it: back to
+        back), "pending" while it is not known yet."""
+        names = self.tokens
+        first = max(seg.first, self._done)
+        pending = self._unknown is not None and self._unknown.stop == first
+        a = self._unknown.first if pending else first
+        for i in range(min(seg.first, known) - 1, a - 1, -1):
+            if names[i].name == "T_STILL":
+                a = i + 1
+                break
+        for i in range(seg.stop, min(known, a + SPOT_MAX + 1)):
+            if names[i].name == "T_STILL":
+                return (a, i) if i - a <= SPOT_MAX else None
+        if known > a + SPOT_MAX:
+            return None
+        return (a, known) if closed and known > seg.first else "pending"
+
+    def _arc(self, a: int, b: int) -> np.ndarray:
+        """Cumulative path length of the track's valid samples over tokens a..b, at each
+        token boundary: (b − a + 1,)."""
+        s0, s1 = self.tokens[a].start, self.tokens[b - 1].end
+        p, v = np.asarray(self.p[s0:s1], dtype=float), np.asarray(self.valid[s0:s1], dtype=bool)
+        step = np.linalg.norm(np.diff(p, axis=0), axis=1) * (v[1:] & v[:-1])
+        cum = np.concatenate([[0.0], np.cumsum(step)])
+        bounds = [self.tokens[k].start - s0 for k in range(a, b)] + [s1 - 1 - s0]
+        return cum[np.clip(bounds, 0, len(cum) - 1)]
+
+    def _best(self, starts, ends: list, known: int, strict: float = 1.0, motion=None):
         """The best (first, stop, action, edits) over windows starting in ``starts`` and
         ending in one of the ``ends`` intervals, or None when its shape distance is over
-        ``strict`` × the action's rejection distance."""
+        ``strict`` × the action's rejection distance. With ``motion`` (tokens a..b between
+        pauses) a window pays for the motion it leaves out: its shape distance counts over
+        the part of the motion's path length it covers, the rest at the action's rejection
+        distance (what a step nothing explains is worth) — a part of a gesture does not win
+        over the whole by matching another gesture's part closely."""
         from doodle.core.tokens import CODES
 
         names = [k.name for k in self.tokens]
@@ -479,9 +522,20 @@ class Refiner:
             return None
         ds = self.shapes.distances_of(windows, self._read)  # (windows, actions)
         edits = np.array(edits)
-        score = np.where(self._allowed & np.isfinite(ds), edits + WEIGHT * ds, np.inf)
+        cost = ds
+        if motion is not None:
+            a, b = motion
+            cum = self._arc(a, b)
+            if cum[-1] > 0:
+                inside = np.array([(cum[min(max(e, a), b) - a] - cum[min(max(f, a), b) - a]) / cum[-1]
+                                   for f, e in windows])[:, None]
+                cost = inside * ds + (1.0 - inside) * self.shapes.reject[None, :]
+        fits = self._allowed & np.isfinite(ds)
+        own = np.where(fits, edits + WEIGHT * ds, np.inf)  # each window is the action it is nearest…
+        fits &= (own == own.min(axis=1, keepdims=True)) & (ds <= strict * self.shapes.reject[None, :])  # …if that fits
+        score = np.where(fits, edits + WEIGHT * cost, np.inf)
         w, k = np.unravel_index(int(np.argmin(score)), score.shape)
-        if not np.isfinite(score[w, k]) or ds[w, k] > strict * self.shapes.reject[k]:
+        if not np.isfinite(score[w, k]):
             return None
         return windows[w][0], windows[w][1], int(k), float(edits[w, k])
 
