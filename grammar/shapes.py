@@ -13,7 +13,9 @@ hand is turned tells an uppercut from a hook. The shape distance of a performanc
 action is the smallest DTW cost between its features and an example's, per step. It ranks
 the actions whose expressions the Matcher found: ``edits +`` :data:`WEIGHT` ``× shape
 distance``; an action is rejected past a distance derived from its examples
-(:func:`reject_distances`).
+(:func:`reject_distances`). Of the windows around a segment, the one explaining the motion
+between the pauses best wins: a window leaving part of it out pays for that part at the
+action's rejection distance (:class:`Refiner`).
 
 DTW costs of one performance against every template are computed at once (one row
 recurrence vectorised over templates), about 0.2 ms for 33 templates of 31 steps.
@@ -367,16 +369,22 @@ class Refiner:
     likewise around its last — or, when the next segment has shapes too, around the next
     one's last (the Matcher, with a learned action's large tolerance, may cut one long
     gesture in two) — no window starting or ending on a pause or reaching back into what
-    is already decided, is scored for every shaped action as ``edits + WEIGHT × shape distance``; the
-    best window and action win — or, when its shape distance is over that action's
-    :attr:`ShapeSet.reject`, the segment is unknown. A window may also take back up to
+    is already decided, is scored for every shaped action as ``edits + WEIGHT × shape distance``.
+    Each window is the action it scores best for, when its shape distance is within that
+    action's :attr:`ShapeSet.reject` (else it is none). The segment's *motion* — its tokens
+    from the pause before it to the pause after it (or the end of the track), when that is
+    at most :data:`SPOT_MAX` tokens — bounds the windows (none crosses those pauses) and is
+    a window itself; a window pays for the motion's path length it leaves out as if that
+    were at the action's rejection distance (:meth:`_best`). The best window wins; with
+    none, the segment is unknown. A window may also take back up to
     :data:`UNKNOWN_REACH` tokens of the unknown run before it, or reach as far into the
     unknown run after it. Tokens a window takes from the next segment are taken from it;
     tokens it gives up are unknown. An unknown run of :data:`SPOT_TOKENS` to
     :data:`SPOT_MAX` tokens is searched the same way and reported as a learned action when
     one fits within :data:`SPOT` of its rejection distance. Other segments pass through
-    (less any tokens taken). The batch form (:func:`refine`) is this run to the end, so
-    streaming equals batch.
+    (less any tokens taken). A shaped segment is decided once the pause ending its motion
+    is known (or :data:`SPOT_MAX` tokens have passed without one). The batch form
+    (:func:`refine`) is this run to the end, so streaming equals batch.
 
     ``tokens`` is the track's token list (append as the Segmenter gives them); ``p``, ``q``
     and ``valid`` the track's samples, at least as far as the tokens go; ``track`` its name
@@ -445,9 +453,9 @@ class Refiner:
             starts = list(range(max(lowest, seg.first - back), min(seg.stop, seg.first + TRIM + 1)))
             motion = self._motion(seg, known, closed)
             motion = None if motion == "pending" else motion
-            if motion is not None:  # the whole motion between pauses is a window too
-                starts = sorted(set(starts) | {motion[0]})
-                ends.append((motion[1], motion[1]))
+            if motion is not None:  # the whole motion between pauses is a window too, and no window leaves it
+                starts = sorted({f for f in starts if f >= motion[0]} | {motion[0]})
+                ends = [(lo, min(hi, motion[1])) for lo, hi in ends if lo <= motion[1]] + [(motion[1], motion[1])]
             best = self._best(starts, ends, known, motion=motion)
         else:
             return self._emit(seg.action, first, seg.stop, seg.exact, seg.distance)
