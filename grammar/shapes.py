@@ -440,7 +440,11 @@ class Refiner:
         if first >= seg.stop:
             return []
         if seg.action == UNKNOWN and SPOT_TOKENS <= seg.stop - first <= SPOT_MAX:
-            best = self._best(range(first, seg.stop), [(first + 2, seg.stop)], known, SPOT)
+            moving = [i for i in range(first, seg.stop) if self.tokens[i].name != "T_STILL"]
+            motion = None  # a run that is one motion between pauses is read whole, as a shaped segment's
+            if moving and all(self.tokens[i].name != "T_STILL" for i in range(moving[0], moving[-1] + 1)):
+                motion = (moving[0], moving[-1] + 1)
+            best = self._best(range(first, seg.stop), [(first + 2, seg.stop)], known, SPOT, motion=motion)
         elif seg.action in self.shapes.names:
             pending = self._unknown is not None and self._unknown.stop == first
             lowest = self._unknown.first if pending else first  # it may take back tokens of an unknown run
