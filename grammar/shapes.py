@@ -444,7 +444,8 @@ class Refiner:
             motion = None  # a run that is one motion between pauses is read whole, as a shaped segment's
             if moving and all(self.tokens[i].name != "T_STILL" for i in range(moving[0], moving[-1] + 1)):
                 motion = (moving[0], moving[-1] + 1)
-            best = self._best(range(first, seg.stop), [(first + 2, seg.stop)], known, SPOT, motion=motion)
+            best = self._best(range(first, seg.stop), [(first + 2, seg.stop)], known, SPOT, motion=motion,
+                              across=False)
         elif seg.action in self.shapes.names:
             pending = self._unknown is not None and self._unknown.stop == first
             lowest = self._unknown.first if pending else first  # it may take back tokens of an unknown run
@@ -504,14 +505,15 @@ class Refiner:
         bounds = [self.tokens[k].start - s0 for k in range(a, b)] + [s1 - 1 - s0]
         return cum[np.clip(bounds, 0, len(cum) - 1)]
 
-    def _best(self, starts, ends: list, known: int, strict: float = 1.0, motion=None):
+    def _best(self, starts, ends: list, known: int, strict: float = 1.0, motion=None, across: bool = True):
         """The best (first, stop, action, edits) over windows starting in ``starts`` and
         ending in one of the ``ends`` intervals, or None when its shape distance is over
         ``strict`` × the action's rejection distance. With ``motion`` (tokens a..b between
         pauses) a window pays for the motion it leaves out: its shape distance counts over
         the part of the motion's path length it covers, the rest at the action's rejection
         distance (what a step nothing explains is worth) — a part of a gesture does not win
-        over the whole by matching another gesture's part closely."""
+        over the whole by matching another gesture's part closely. Unless ``across``, no
+        window holds a pause (what is searched in an unknown run is one motion)."""
         from doodle.core.tokens import CODES
 
         names = [k.name for k in self.tokens]
@@ -524,6 +526,8 @@ class Refiner:
             d = auto.initial.copy()
             for e in range(f + 1, last + 1):
                 d = auto.step(d, CODES[names[e - 1]])
+                if not across and names[e - 1] == "T_STILL":
+                    break
                 if not any(lo <= e <= hi for lo, hi in ends) or names[e - 1] == "T_STILL":
                     continue
                 a, b = self.tokens[f].start, self.tokens[e - 1].end
