@@ -13,7 +13,9 @@ hand is turned tells an uppercut from a hook. The shape distance of a performanc
 action is the smallest DTW cost between its features and an example's, per step. It ranks
 the actions whose expressions the Matcher found: ``edits +`` :data:`WEIGHT` ``× shape
 distance``; an action is rejected past a distance derived from its examples
-(:func:`reject_distances`).
+(:func:`reject_distances`). Of the windows around a segment, the one explaining the motion
+between the pauses best wins: a window leaving part of it out pays for that part at the
+action's rejection distance (:class:`Refiner`).
 
 DTW costs of one performance against every template are computed at once (one row
 recurrence vectorised over templates), about 0.2 ms for 33 templates of 31 steps.
@@ -367,16 +369,22 @@ class Refiner:
     likewise around its last — or, when the next segment has shapes too, around the next
     one's last (the Matcher, with a learned action's large tolerance, may cut one long
     gesture in two) — no window starting or ending on a pause or reaching back into what
-    is already decided, is scored for every shaped action as ``edits + WEIGHT × shape distance``; the
-    best window and action win — or, when its shape distance is over that action's
-    :attr:`ShapeSet.reject`, the segment is unknown. A window may also take back up to
+    is already decided, is scored for every shaped action as ``edits + WEIGHT × shape distance``.
+    Each window is the action it scores best for, when its shape distance is within that
+    action's :attr:`ShapeSet.reject` (else it is none). The segment's *motion* — its tokens
+    from the pause before it to the pause after it (or the end of the track), when that is
+    at most :data:`SPOT_MAX` tokens — bounds the windows (none crosses those pauses) and is
+    a window itself; a window pays for the motion's path length it leaves out as if that
+    were at the action's rejection distance (:meth:`_best`). The best window wins; with
+    none, the segment is unknown. A window may also take back up to
     :data:`UNKNOWN_REACH` tokens of the unknown run before it, or reach as far into the
     unknown run after it. Tokens a window takes from the next segment are taken from it;
     tokens it gives up are unknown. An unknown run of :data:`SPOT_TOKENS` to
     :data:`SPOT_MAX` tokens is searched the same way and reported as a learned action when
     one fits within :data:`SPOT` of its rejection distance. Other segments pass through
-    (less any tokens taken). The batch form (:func:`refine`) is this run to the end, so
-    streaming equals batch.
+    (less any tokens taken). A shaped segment is decided once the pause ending its motion
+    is known (or :data:`SPOT_MAX` tokens have passed without one). The batch form
+    (:func:`refine`) is this run to the end, so streaming equals batch.
 
     ``tokens`` is the track's token list (append as the Segmenter gives them); ``p``, ``q``
     and ``valid`` the track's samples, at least as far as the tokens go; ``track`` its name
@@ -411,26 +419,33 @@ class Refiner:
         if len(self._waiting) < 2:  # the next segment decides how far a window may reach
             return False
         after = self._waiting[1]
-        return len(self.tokens) >= (after.stop if after.action in self.shapes.names else first.stop) + REACH
+        if len(self.tokens) < (after.stop if after.action in self.shapes.names else first.stop) + REACH:
+            return False
+        return self._motion(first, len(self.tokens), False) != "pending"  # where its motion ends is known
 
     def close(self) -> list:
         out = []
         while self._waiting:
             after = self._waiting[1] if len(self._waiting) > 1 else None
-            out += self._decide(self._waiting.pop(0), after, len(self.tokens))
+            out += self._decide(self._waiting.pop(0), after, len(self.tokens), closed=True)
         if self._unknown is not None:
             out.append(self._unknown)
             self._unknown = None
         return out
 
-    def _decide(self, seg, after, known: int) -> list:
+    def _decide(self, seg, after, known: int, closed: bool = False) -> list:
         from grammar.matcher import UNKNOWN
 
         first = max(seg.first, self._done)
         if first >= seg.stop:
             return []
         if seg.action == UNKNOWN and SPOT_TOKENS <= seg.stop - first <= SPOT_MAX:
-            best = self._best(range(first, seg.stop), [(first + 2, seg.stop)], known, SPOT)
+            moving = [i for i in range(first, seg.stop) if self.tokens[i].name != "T_STILL"]
+            motion = None  # a run that is one motion between pauses is read whole, as a shaped segment's
+            if moving and all(self.tokens[i].name != "T_STILL" for i in range(moving[0], moving[-1] + 1)):
+                motion = (moving[0], moving[-1] + 1)
+            best = self._best(range(first, seg.stop), [(first + 2, seg.stop)], known, SPOT, motion=motion,
+                              across=False)
         elif seg.action in self.shapes.names:
             pending = self._unknown is not None and self._unknown.stop == first
             lowest = self._unknown.first if pending else first  # it may take back tokens of an unknown run
@@ -440,7 +455,13 @@ class Refiner:
                 ends.append((after.stop - TRIM, after.stop + REACH))
             elif after is not None and after.action == UNKNOWN:
                 ends.append((seg.stop, min(after.stop, seg.stop + UNKNOWN_REACH)))
-            best = self._best(range(max(lowest, seg.first - back), min(seg.stop, seg.first + TRIM + 1)), ends, known)
+            starts = list(range(max(lowest, seg.first - back), min(seg.stop, seg.first + TRIM + 1)))
+            motion = self._motion(seg, known, closed)
+            motion = None if motion == "pending" else motion
+            if motion is not None:  # the whole motion between pauses is a window too, and no window leaves it
+                starts = sorted({f for f in starts if f >= motion[0]} | {motion[0]})
+                ends = [(lo, min(hi, motion[1])) for lo, hi in ends if lo <= motion[1]] + [(motion[1], motion[1])]
+            best = self._best(starts, ends, known, motion=motion)
         else:
             return self._emit(seg.action, first, seg.stop, seg.exact, seg.distance)
         if best is None:
@@ -453,10 +474,46 @@ class Refiner:
         return (self._emit(UNKNOWN, first, f, False, None) + self._emit(self.shapes.names[k], f, e, edits == 0.0, edits)
                 + self._emit(UNKNOWN, e, seg.stop, False, None))
 
-    def _best(self, starts: range, ends: list, known: int, strict: float = 1.0):
+    def _motion(self, seg, known: int, closed: bool):
+        """The tokens ``(a, b)`` of the motion a shaped segment lies in: from the last pause
+        before it (not reaching back into what is decided, but into a pending unknown run)
+        to the first pause at or after its end — or the end of the track once it is closed;
+        None when that is more than :data:`SPOT_MAX` tokens (no pause bounds it: back to
+        back), "pending" while it is not known yet."""
+        names = self.tokens
+        first = max(seg.first, self._done)
+        pending = self._unknown is not None and self._unknown.stop == first
+        a = self._unknown.first if pending else first
+        for i in range(min(seg.first, known) - 1, a - 1, -1):
+            if names[i].name == "T_STILL":
+                a = i + 1
+                break
+        for i in range(seg.stop, min(known, a + SPOT_MAX + 1)):
+            if names[i].name == "T_STILL":
+                return (a, i) if i - a <= SPOT_MAX else None
+        if known > a + SPOT_MAX:
+            return None
+        return (a, known) if closed and known > seg.first else "pending"
+
+    def _arc(self, a: int, b: int) -> np.ndarray:
+        """Cumulative path length of the track's valid samples over tokens a..b, at each
+        token boundary: (b − a + 1,)."""
+        s0, s1 = self.tokens[a].start, self.tokens[b - 1].end
+        p, v = np.asarray(self.p[s0:s1], dtype=float), np.asarray(self.valid[s0:s1], dtype=bool)
+        step = np.linalg.norm(np.diff(p, axis=0), axis=1) * (v[1:] & v[:-1])
+        cum = np.concatenate([[0.0], np.cumsum(step)])
+        bounds = [self.tokens[k].start - s0 for k in range(a, b)] + [s1 - 1 - s0]
+        return cum[np.clip(bounds, 0, len(cum) - 1)]
+
+    def _best(self, starts, ends: list, known: int, strict: float = 1.0, motion=None, across: bool = True):
         """The best (first, stop, action, edits) over windows starting in ``starts`` and
         ending in one of the ``ends`` intervals, or None when its shape distance is over
-        ``strict`` × the action's rejection distance."""
+        ``strict`` × the action's rejection distance. With ``motion`` (tokens a..b between
+        pauses) a window pays for the motion it leaves out: its shape distance counts over
+        the part of the motion's path length it covers, the rest at the action's rejection
+        distance (what a step nothing explains is worth) — a part of a gesture does not win
+        over the whole by matching another gesture's part closely. Unless ``across``, no
+        window holds a pause (what is searched in an unknown run is one motion)."""
         from doodle.core.tokens import CODES
 
         names = [k.name for k in self.tokens]
@@ -469,6 +526,8 @@ class Refiner:
             d = auto.initial.copy()
             for e in range(f + 1, last + 1):
                 d = auto.step(d, CODES[names[e - 1]])
+                if not across and names[e - 1] == "T_STILL":
+                    break
                 if not any(lo <= e <= hi for lo, hi in ends) or names[e - 1] == "T_STILL":
                     continue
                 a, b = self.tokens[f].start, self.tokens[e - 1].end
@@ -479,9 +538,20 @@ class Refiner:
             return None
         ds = self.shapes.distances_of(windows, self._read)  # (windows, actions)
         edits = np.array(edits)
-        score = np.where(self._allowed & np.isfinite(ds), edits + WEIGHT * ds, np.inf)
+        cost = ds
+        if motion is not None:
+            a, b = motion
+            cum = self._arc(a, b)
+            if cum[-1] > 0:
+                inside = np.array([(cum[min(max(e, a), b) - a] - cum[min(max(f, a), b) - a]) / cum[-1]
+                                   for f, e in windows])[:, None]
+                cost = inside * ds + (1.0 - inside) * self.shapes.reject[None, :]
+        fits = self._allowed & np.isfinite(ds)
+        own = np.where(fits, edits + WEIGHT * ds, np.inf)  # each window is the action it is nearest…
+        fits &= (own == own.min(axis=1, keepdims=True)) & (ds <= strict * self.shapes.reject[None, :])  # …if that fits
+        score = np.where(fits, edits + WEIGHT * cost, np.inf)
         w, k = np.unravel_index(int(np.argmin(score)), score.shape)
-        if not np.isfinite(score[w, k]) or ds[w, k] > strict * self.shapes.reject[k]:
+        if not np.isfinite(score[w, k]):
             return None
         return windows[w][0], windows[w][1], int(k), float(edits[w, k])
 

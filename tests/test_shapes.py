@@ -172,3 +172,43 @@ def test_manifest_shape_and_track_fields(tmp_path):
 
     with pytest.raises(DoodleError, match="a.npz \\(shape of action 'A'\\): no such file"):
         compile_library(load_library(tmp_path))
+
+
+def test_the_whole_motion_wins_over_a_part_nearer_another_gesture(tmp_path):
+    """Sub_U007's held-out uppercuts: a part of each comes nearer the hook than the whole
+    comes to the uppercut, and the Refiner once took that part for a hook. A window that
+    leaves out motion between the pauses pays for it, so the whole is read, as the uppercut."""
+    from doodle.input.loader import load
+    from grammar.recognizer import load_actions, recognize
+
+    gestures = ["hook_left", "uppercut_left", "hook_right", "uppercut_right"]
+    lib, files = _learn_all(tmp_path, gestures, "Sub_U007")
+    compiled = load_actions(lib, False)
+    for path in files["uppercut_left"][3:]:
+        doodle = load(path, convention="unity").select(["c0"])
+        segs = [s for s in recognize(doodle, compiled)["c0"][1] if s.action != "unknown"]
+        longest = max(segs, key=lambda s: s.end - s.start)
+        assert longest.action == "uppercut_left"
+        assert longest.end - longest.start > 0.6 * len(doodle.t)
+
+
+@pytest.mark.parametrize("idle", [True, False])
+def test_streaming_refiner_equals_batch_across_gestures(tmp_path, idle):
+    """Several performances in one stream, with pauses between them or back to back: the
+    Refiner waits until the motion a segment lies in has ended, so live equals batch."""
+    from bench.learning_protocol import stream
+    from doodle.app.replay import replay
+    from doodle.input.loader import load
+    from grammar.recognizer import load_actions, recognize
+
+    gestures = ["hook_left", "hook_right", "golf_swing", "uppercut_left"]
+    lib, files = _learn_all(tmp_path, gestures)
+    compiled = load_actions(lib, False)
+    pieces = [(g, load(files[g][k], convention="unity").select(["c0"])) for g in gestures for k in (3, 4)]
+    doodle, spans = stream(pieces, np.random.default_rng(1), idle)
+    found = replay(doodle, compiled).found
+    batch = recognize(doodle, compiled)
+    expected = sorted((name, s.action, float(doodle.track(name).t[s.start]))
+                      for name, (_, segs) in batch.items() for s in segs if s.action != "unknown")
+    assert sorted((r.track, r.action, r.start) for r in found) == expected
+    assert len(expected) >= len(spans) - 2
