@@ -310,14 +310,14 @@ def _report(users, figures, base, sweeps, product) -> None:
             print(f"  {label}, {'+'.join(tracks):<5}  accuracy {np.mean([figures[metric, u] for u in users]):.3f} "
                   f"(DTW 1-NN baseline {np.mean([base[metric, u] for u in users]):.3f})")
             print(f"      per user            {head}")
-            print(f"      ours (in-sample)    " + "  ".join(f"{figures[metric, u]:5.3f}" for u in users))
+            print("      ours (in-sample)    " + "  ".join(f"{figures[metric, u]:5.3f}" for u in users))
             for name in GRID:
                 if any(k[0] == name for k in sweeps if isinstance(k, tuple)):
                     held = _held_out(users, sweeps, name, metric, product)
                     print(f"      {name} held out    " + "  ".join(f"{held[u][1]:5.3f}" for u in users)
                           + f"  mean {np.mean([held[u][1] for u in users]):.3f}; chosen "
                           + ", ".join(f"{held[u][0]:g}" for u in users) + f" (product {product[name]:g})")
-            print(f"      DTW 1-NN            " + "  ".join(f"{base[metric, u]:5.3f}" for u in users))
+            print("      DTW 1-NN            " + "  ".join(f"{base[metric, u]:5.3f}" for u in users))
     for tracks in SETTINGS:
         for idle in (True, False):
             metric = ("stream", idle, tracks)
@@ -326,7 +326,7 @@ def _report(users, figures, base, sweeps, product) -> None:
             print(f"  continuous, {'+'.join(tracks):<5} {'idle between' if idle else 'back to back'}: "
                   f"F1 {f1(counts):.3f} (precision {tp / max(det, 1):.3f}, recall {tp / max(truth, 1):.3f}, "
                   f"{truth} gestures in {len(users)} streams)")
-            print(f"      per user F1 (in-sample) " + "  ".join(f"{f1([figures[metric, u]]):5.3f}" for u in users))
+            print("      per user F1 (in-sample) " + "  ".join(f"{f1([figures[metric, u]]):5.3f}" for u in users))
             for name in GRID:
                 if any(k[0] == name for k in sweeps if isinstance(k, tuple)):
                     held = _held_out(users, sweeps, name, metric, product)
