@@ -16,6 +16,8 @@ so that no transition cuts an execution stage.
 
 from __future__ import annotations
 
+from functools import lru_cache
+
 import numpy as np
 from scipy.ndimage import minimum_filter
 from scipy.spatial.transform import Rotation
@@ -28,17 +30,25 @@ DERIVATIVE_WEIGHTS = (1.0, 0.1, 0.01, 0.001)  # position, velocity, acceleration
 
 def frame_features(motion: Motion, pelvis: int) -> np.ndarray:
     """(F, D) per-frame features: pelvis-relative joint positions in the pelvis's heading
-    frame, and their first three time derivatives, weighted to comparable scales."""
+    frame, and their first three time derivatives, weighted to comparable scales. Computed
+    once per clip (a scene transitions between the same few clips many times); read-only."""
+    return _frame_features(motion, int(pelvis))
+
+
+@lru_cache(maxsize=64)  # bounded: a long clip's features are about a megabyte
+def _frame_features(motion: Motion, pelvis: int) -> np.ndarray:
     positions, rotations = forward_kinematics(motion)
     rel = positions - positions[:, pelvis : pelvis + 1]
     forward = Rotation.from_quat(rotations[:, pelvis]).apply([0.0, 0.0, 1.0])
     yaw = np.arctan2(forward[:, 0], forward[:, 2])
-    unturn = Rotation.from_rotvec(np.outer(-yaw, [0.0, 1.0, 0.0]))
-    rel = np.stack([unturn[i].apply(rel[i]) for i in range(motion.frames)])
+    c, s = np.cos(yaw)[:, None], np.sin(yaw)[:, None]  # turned by −yaw about y, every frame at once
+    rel = np.stack([c * rel[..., 0] - s * rel[..., 2], rel[..., 1], s * rel[..., 0] + c * rel[..., 2]], axis=-1)
     feats = [rel]
     for _ in range(3):
         feats.append(np.gradient(feats[-1], motion.frame_time, axis=0) if motion.frames > 1 else feats[-1] * 0)
-    return np.concatenate([w * f.reshape(motion.frames, -1) for w, f in zip(DERIVATIVE_WEIGHTS, feats)], axis=1)
+    out = np.concatenate([w * f.reshape(motion.frames, -1) for w, f in zip(DERIVATIVE_WEIGHTS, feats)], axis=1)
+    out.flags.writeable = False
+    return out
 
 
 def distance_map(source: Motion, target: Motion, pelvis_s: int, pelvis_t: int) -> np.ndarray:

@@ -39,3 +39,22 @@ def test_transition_points_never_cut_an_execution():
         assert i >= s.stages.execution, (a, b, i)
         assert j <= t.stages.anticipation, (a, b, j)
         assert 0 <= i < s.motion.frames and 0 <= j < t.motion.frames
+
+
+def test_features_turn_every_frame_into_the_pelvis_heading_and_are_computed_once():
+    """The vectorised heading turn equals turning each frame with scipy's Rotation (the
+    definition), and a clip's features are computed once and read-only."""
+    from scipy.spatial.transform import Rotation
+
+    from retarget.skeleton import forward_kinematics
+    from retarget.transitions import frame_features
+
+    motion = clip("Walk").motion
+    positions, rotations = forward_kinematics(motion)
+    rel = positions - positions[:, :1]
+    forward = Rotation.from_quat(rotations[:, 0]).apply([0.0, 0.0, 1.0])
+    yaw = np.arctan2(forward[:, 0], forward[:, 2])
+    turned = np.stack([Rotation.from_rotvec([0.0, -y, 0.0]).apply(r) for y, r in zip(yaw, rel)])
+    feats = frame_features(motion, 0)
+    np.testing.assert_allclose(feats[:, : rel[0].size], turned.reshape(motion.frames, -1), atol=1e-12)
+    assert frame_features(motion, 0) is feats and not feats.flags.writeable
