@@ -16,8 +16,6 @@ def confusion_png(matrix, labels: list[str], path, title: str) -> Path:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from doodle.core.files import atomic_write
-
     m = np.asarray(matrix, dtype=float)
     share = m / np.maximum(m.sum(axis=1, keepdims=True), 1)
     fig, ax = plt.subplots(figsize=(max(5.0, 1.0 + 0.75 * len(labels)), max(4.5, 0.8 + 0.7 * len(labels))))
@@ -31,12 +29,7 @@ def confusion_png(matrix, labels: list[str], path, title: str) -> Path:
             ax.text(j, i, f"{int(m[i, j])}", ha="center", va="center", color="white" if share[i, j] > 0.5 else "black")
     accuracy = np.trace(m) / max(m.sum(), 1)
     ax.set_title(f"{title}\naccuracy {accuracy:.3f}")
-    fig.tight_layout()
-    buf = io.BytesIO()
-    fig.savefig(buf, dpi=100, format="png")
-    plt.close(fig)
-    atomic_write(Path(path), buf.getvalue())
-    return Path(path)
+    return _save(fig, path)
 
 
 def reliability_png(reliability: dict, path) -> Path:
@@ -47,8 +40,6 @@ def reliability_png(reliability: dict, path) -> Path:
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-
-    from doodle.core.files import atomic_write
 
     fig, axes = plt.subplots(1, 2, figsize=(9.0, 4.2))
     for ax, factor in zip(axes, ("time", "weight")):
@@ -66,6 +57,15 @@ def reliability_png(reliability: dict, path) -> Path:
         ax.set_ylabel("share right")
         ax.set_title(f"{'Time' if factor == 'time' else 'Weight'}: ECE {r['ece']:.3f} ({r['n']} decisions)")
         ax.legend(loc="lower right", fontsize=8)
+    return _save(fig, path)
+
+
+def _save(fig, path) -> Path:
+    """The figure as a PNG at ``path``, written atomically; the figure closed."""
+    import matplotlib.pyplot as plt
+
+    from doodle.core.files import atomic_write
+
     fig.tight_layout()
     buf = io.BytesIO()
     fig.savefig(buf, dpi=100, format="png")

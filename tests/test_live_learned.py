@@ -102,21 +102,10 @@ def test_learn_wizard_shows_what_recognize_says(learned, tmp_path, monkeypatch, 
     take = load(_vive("hook_right")[4], convention="unity")
     end = float(take.t[-1])
 
-    class Takes:  # every take replays the held-out performance, between two trigger presses
-        def __init__(self):
-            self.current = SyntheticSource(take, triggers=[0.02, end - 0.02])
-            self.tracks, self.rate, self.device = self.current.tracks, self.current.rate, self.current.device
-
-        def read(self):
-            return self.current.read()
-
-        def close(self):
-            pass
-
-    source = Takes()
+    source = _Takes(lambda: SyntheticSource(take, triggers=[0.02, end - 0.02]))  # the held-out take, each time
 
     def record_take(src, path, **kw):
-        source.current = SyntheticSource(take, triggers=[0.02, end - 0.02])
+        source.next()
         return real_record(src, path, **_quick_clock(), **kw)
 
     monkeypatch.setattr(cli_learn, "open_source", lambda: source)
@@ -134,6 +123,25 @@ def test_learn_wizard_shows_what_recognize_says(learned, tmp_path, monkeypatch, 
     assert ("c0", "hook_right") in want
     assert sorted(shown) == sorted(want)
     assert _labels(recognize(first, replace(compiled, shapes=None)))["c0"] != ["hook_right"]  # tokens alone: not it
+
+
+class _Takes:
+    """The controllers for the learning wizard: each take a fresh source from ``fresh()``,
+    between two trigger presses."""
+
+    def __init__(self, fresh):
+        self.fresh = fresh
+        self.next()
+        self.tracks, self.rate, self.device = self.current.tracks, self.current.rate, self.current.device
+
+    def next(self):
+        self.current = self.fresh()
+
+    def read(self):
+        return self.current.read()
+
+    def close(self):
+        pass
 
 
 def test_nothing_to_recognise_yet_shows_the_tokens(tmp_path, monkeypatch, capsys):
@@ -161,27 +169,15 @@ def test_nothing_to_recognise_yet_shows_the_tokens(tmp_path, monkeypatch, capsys
 
     seeds = iter(range(11, 30))
 
-    class Takes:
-        def __init__(self):
-            self.current = self.fresh()
-            self.tracks, self.rate, self.device = self.current.tracks, self.current.rate, self.current.device
+    def fresh():
+        d = performance(next(seeds))
+        return SyntheticSource(d, triggers=[0.2, float(d.t[-1]) - 0.2])
 
-        @staticmethod
-        def fresh():
-            d = performance(next(seeds))
-            return SyntheticSource(d, triggers=[0.2, float(d.t[-1]) - 0.2])
-
-        def read(self):
-            return self.current.read()
-
-        def close(self):
-            pass
-
-    source = Takes()
+    source = _Takes(fresh)
 
     def record_take(src, path, **kw):
         assert kw["recognise"] is False and kw["compiled"] is None
-        source.current = source.fresh()
+        source.next()
         return record(src, path, **_quick_clock(), **kw)
 
     monkeypatch.setattr(cli_learn, "open_source", lambda: source)

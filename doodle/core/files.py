@@ -26,26 +26,11 @@ def atomic_path(path) -> Iterator[str]:
     it pick the right format) and rename it to ``path`` when the block succeeds, keeping an
     existing file's mode. On any exception the temporary file is removed, an existing
     ``path`` is untouched, and the exception propagates (OSError becomes DoodleError)."""
-    path = Path(path)
-    directory = output_dir(path.parent if str(path.parent) else Path("."), path)
     try:
-        fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=path.suffix or ".tmp", dir=directory)
+        with atomic_files() as staged:
+            yield staged(path)
     except OSError as exc:
         raise DoodleError(f"{path}: cannot write: {exc.strerror or exc}") from None
-    os.close(fd)
-    try:
-        yield tmp
-        try:
-            mode = os.stat(path).st_mode & 0o777
-        except OSError:
-            mode = 0o644
-        os.chmod(tmp, mode)
-        os.replace(tmp, path)
-    except OSError as exc:
-        raise DoodleError(f"{path}: cannot write: {exc.strerror or exc}") from None
-    finally:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
 
 
 def atomic_write(path, chunks: Iterable[str] | bytes) -> None:
