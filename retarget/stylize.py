@@ -44,7 +44,7 @@ from scipy.sparse import csr_matrix
 
 from doodle.core import quat
 from doodle.core.quat import make_continuous
-from retarget.analysis import Stages, foot_contacts, guess_roles, partition
+from retarget.analysis import Stages, foot_contacts, guess_roles, partition, pelvis_of
 from retarget.effort_signature import FASTEST, RATE, burst, most_moving, speed_profile
 from retarget.feet import two_bone_ik
 from retarget.qa import Limits, check, planted_moves
@@ -59,10 +59,11 @@ MAX_SPEEDUP = 3.0  # Weight retiming plays no frame more than 3× faster (or slo
 PIN_FADE = 0.2  # s: a planted foot's pin eases in and out over at least this much output time ...
 PIN_SPEED = 0.5  # m/s: ... and no faster than this pulls the foot to where it stood
 BURST_SHARE = 0.3  # the execution Time retimes: the effector's speed at least this share of its peak
-SUSTAINED_CAP = 0.9  # Sustained: the effector outside the execution no faster than this share of its peak in it
+SUSTAINED_CAP = 0.7  # Sustained: the effector outside the execution no faster than this share of its peak in it
 SPEED_MARGIN = 0.8  # retiming keeps every joint under this share of FASTEST between clip frames ...
 SPEED_BOUND = 0.95  # ... and the output's, measured after every edit (contact IK too), under this share
 PLANTED_SPEED = 0.8 * Limits().slide  # m/s: a flat foot played no faster than its neutral or than this
+TRAVEL_SMOOTHING = 0.5  # s: Weight widens the acting hand or foot's path less the body's travel, low-passed over this
 WIDEN = 0.5  # Weight scales the acting hand or foot's path by 1 + this × L_w (Strong) or 1/(1 − this × L_w) (Light)
 
 
@@ -415,15 +416,18 @@ def _weight_poses(motion: Motion, spans: tuple[int, int, int], lw: float, effect
     m = motion_scale(motion, 0, motion.frames, c, "partial", keep_contacts=False, smooth=False,
                      bones=_acting(motion, "partial", effector))
     k = 1.0 + WIDEN * lw if lw > 0 else 1.0 / (1.0 - WIDEN * lw)
-    m = _widen(m, effector, k)
+    m = _widen(m, effector, k, forward_kinematics(motion)[0])
     return reshape(m, spans[1], spans[2], 0.1 * lw, "vertical")
 
 
-def _widen(motion: Motion, effector: int, k: float) -> Motion:
-    """The effector's path, relative to the root of its limb (shoulder or hip), scaled by ``k``
-    about its mean over the clip, by two-bone IK on the limb (as far as the limb reaches):
-    the rotations of a scaled shoulder or hip overshoot their direction instead of reaching
-    farther, a scaled path widens the movement itself."""
+def _widen(motion: Motion, effector: int, k: float, neutral: np.ndarray) -> Motion:
+    """The effector's path as the neutral clip makes it (``neutral``: its joint positions) —
+    in the world, less the body's travel (the pelvis's ground-plane path low-passed over
+    :data:`TRAVEL_SMOOTHING`) — scaled by ``k`` about its mean, reached by two-bone IK on the
+    limb from where ``motion`` puts its shoulder or hip (as far as the limb reaches). The
+    neutral's path, not ``motion``'s: the partial motion scale before this turns the chest
+    further, which swings a straight arm sideways (a punch's reach shrinks); the world's, not
+    the shoulder's: a strike's sway and lean into it are part of the movement that widens."""
     parents = motion.skeleton.parents
     mid = int(parents[effector])
     top = int(parents[mid]) if mid >= 0 else -1
@@ -432,9 +436,13 @@ def _widen(motion: Motion, effector: int, k: float) -> Motion:
         return motion
     world = forward_kinematics(motion)
     p = world[0]
-    rel = p[:, effector] - p[:, top]
+    pelvis = pelvis_of(motion.skeleton)
+    sigma = TRAVEL_SMOOTHING / motion.frame_time
+    travel = gaussian_filter1d(neutral[:, pelvis], sigma, axis=0, mode="nearest") * [1.0, 0.0, 1.0]
+    rel = neutral[:, effector] - travel
     centre = rel.mean(axis=0)
-    target = p[:, top] + centre + k * (rel - centre)
+    moved = gaussian_filter1d(p[:, pelvis], sigma, axis=0, mode="nearest") * [1.0, 0.0, 1.0]
+    target = moved + centre + k * (rel - centre)
     target[:, 1] = np.maximum(target[:, 1], min(p[:, effector, 1].min(), target[:, 1].max()))  # a foot no lower than it went
     return two_bone_ik(motion, top, mid, effector, target, np.ones(motion.frames), world=world)
 
