@@ -7,15 +7,16 @@ their own. A learned action therefore keeps the *shapes* of its examples as well
 example's path resampled to :data:`POINTS` points by arc length with the controller's
 orientation there (:func:`sample`; a two-handed action's tracks resampled together, along
 their summed arc length). Its features per step (:func:`features`) are the unit direction
-of the step and the controller's forward and up axes (weighted by :data:`TURN`), in the
-room's frame — a performer faces the table, so left and right mean something, and how the
-hand is turned tells an uppercut from a hook. The shape distance of a performance to an
+of the step and the controller's forward and up axes (weighted by a factor each library
+chooses on its own examples, :func:`choose_turn`), in the room's frame — a performer faces
+the table, so left and right mean something, and how the hand is turned tells one
+person's uppercut from their hook (several people hold a controller each their own way). The shape distance of a performance to an
 action is the smallest DTW cost between its features and an example's, per step. It ranks
 the actions whose expressions the Matcher found: ``edits +`` :data:`WEIGHT` ``× shape
 distance``; an action is rejected past a distance derived from its examples
 (:func:`reject_distances`). Of the windows around a segment, the one explaining the motion
-between the pauses best wins: a window leaving part of it out pays for that part at the
-action's rejection distance (:class:`Refiner`).
+between the pauses best wins — the whole motion whenever it fits an action —, and a window
+leaving part of it out pays for that part at the action's rejection distance (:class:`Refiner`).
 
 DTW costs of one performance against every template are computed at once (one row
 recurrence vectorised over templates), about 0.2 ms for 33 templates of 31 steps.
@@ -80,7 +81,7 @@ def dtw_costs(x: np.ndarray, templates: np.ndarray) -> np.ndarray:
 
 # --- poses of one or several tracks: resampled together, as features ---------------------
 
-TURN = 1.0  # weight of the controller's orientation axes beside the path's directions (both unit vectors)
+TURN = 1.0  # default weight of the controller's orientation axes beside the path's directions (both unit vectors)
 
 
 def sample(poses, points: int = POINTS) -> tuple[np.ndarray, np.ndarray]:
@@ -148,6 +149,7 @@ class Group:
     oriented: bool
     templates: np.ndarray  # (K, POINTS - 1, D) features of every example of the group's actions
     owner: np.ndarray  # (K,) index into ShapeSet.names, sorted
+    turn: float = TURN  # the weight of orientation in its features (:func:`choose_turn`)
 
 
 @dataclass(frozen=True, eq=False)
@@ -179,7 +181,7 @@ class ShapeSet:
             for w, window in enumerate(windows):
                 pq = read(g, window)
                 if pq is not None:
-                    feats.append(features(pq[0], pq[1] if g.oriented else None))
+                    feats.append(features(pq[0], pq[1] if g.oriented else None, g.turn))
                     rows.append(w)
             if rows:
                 out[np.array(rows)[:, None], np.unique(g.owner)[None, :]] = _nearest(g, np.array(feats))
@@ -293,13 +295,16 @@ def shape_set(named: dict, expressions: dict, tracks: dict | None = None, cap: f
             paths = paths[:, None]
         others = tuple(partners.get(n, ()))
         key = ((tracks.get(n),) + others if others else (None,), quats is not None, paths.shape[1])
-        feats = np.array([features(paths[j], None if quats is None else quats[j]) for j in range(len(paths))])
-        keyed.setdefault(key, []).append((k, feats, paths, quats))
+        keyed.setdefault(key, []).append((k, paths, quats))
     groups, reject = [], np.zeros(len(names))
-    for (read, oriented, _), members in keyed.items():
+    for (read, oriented, _), shapes in keyed.items():
+        owner = np.concatenate([np.full(len(paths), k) for k, paths, _ in shapes])
+        turn = choose_turn(shapes, owner) if oriented else 0.0
+        oriented = oriented and turn > 0
+        members = [(k, np.array([features(paths[j], quats[j] if oriented else None, turn) for j in range(len(paths))]),
+                    paths, quats if oriented else None) for k, paths, quats in shapes]
         templates = np.concatenate([f for _, f, _, _ in members])
-        owner = np.concatenate([np.full(len(f), k) for k, f, _, _ in members])
-        group = Group(read, oriented, templates, owner)
+        group = Group(read, oriented, templates, owner, turn)
         groups.append(group)
         reject[[k for k, *_ in members]] = reject_distances(group, members)
     auto = automaton or Automaton(list(names), [compile_expression(parse(expressions[n], n)) for n in names],
@@ -308,15 +313,58 @@ def shape_set(named: dict, expressions: dict, tracks: dict | None = None, cap: f
                     tuple(tuple(partners.get(n, ())) for n in names))
 
 
+TURNS = (0.0, 0.5, 1.0)  # the orientation weights a library chooses among (:func:`choose_turn`)
+
+
+def choose_turn(shapes: list, owner: np.ndarray) -> float:
+    """The weight of the controllers' orientation in a group's features, chosen on its own
+    examples (``[(action, paths, quats)]``, ``owner`` their actions in order) — leave one
+    example out, each read as its nearest other example's action: the weight in
+    :data:`TURNS` that reads most of them right, and among those the one separating the
+    actions most (the mean ratio of the nearest other action's example to the nearest own
+    one). Orientation tells gestures apart when one person holds the controller the same
+    way each time; examples from several people, each holding it their own way, disagree
+    on it, and leaving an example out shows whether they do — nothing is tuned on the
+    performances to be recognised."""
+    if len(set(owner.tolist())) < 2 or len(owner) < 3:
+        return TURN
+    best, key = TURN, None
+    for turn in TURNS:
+        feats = np.array([features(paths[j], quats[j] if turn > 0 else None, turn)
+                          for _, paths, quats in shapes for j in range(len(paths))])
+        right, ratios = 0, []
+        for i in range(len(feats)):
+            costs = dtw_costs(feats[i], np.delete(feats, i, axis=0))
+            rest = np.delete(owner, i)
+            own, other = costs[rest == owner[i]], costs[rest != owner[i]]
+            right += int(rest[int(np.argmin(costs))] == owner[i])
+            if len(own) and len(other):
+                ratios.append(other.min() / max(own.min(), 1e-9))
+        score = (right, float(np.mean(np.log(ratios))) if ratios else 0.0)
+        if key is None or score > key:
+            best, key = turn, score
+    return best
+
+
+SPREAD_Z = 1.96  # an action's spread: the 95 % quantile of a half-normal fitted to its examples' distances
+
+
 def reject_distances(group: Group, members: list) -> np.ndarray:
     """How far from its examples a performance of each action of a group may be — derived
     from the examples, nothing tuned: midway between how far the action's own examples are
-    from each other (each from the others, leave one out: the largest) and how near it
+    from each other and how near it
     comes to *straddles* — the second half of one example joined to the first half of
     another, of any action: what a window across two performances looks like in a stream
     (the synthetic negatives of Jackknife, Taranta et al. 2017, spliced from the
     examples). Where the straddles come nearer than the own examples, the own examples'
-    spread stands (a performance like the examples is never rejected)."""
+    spread stands (a performance like the examples is never rejected).
+
+    The spread: each example's distance to the nearest of the others (leave one out) is
+    taken as a draw from a half-normal — a performance's deviation from a template as
+    noise — whose 95 % quantile (:data:`SPREAD_Z` × their root mean square) bounds a new
+    performance; never less than the largest of them. The largest of three alone would
+    reject a quarter of new performances like them (a fourth draw exceeds the largest of
+    three with probability ¼), and more from a person the examples did not come from."""
     pieces = []  # (paths (T, n, 3), quats or None) of every example
     for _, _, paths, quats in members:
         pieces += [(paths[j], None if quats is None else quats[j]) for j in range(len(paths))]
@@ -336,7 +384,7 @@ def reject_distances(group: Group, members: list) -> np.ndarray:
                      else np.tile([0.0, 0.0, 0.0, 1.0], (len(p), 1)))
                 poses.append((p, q))
             paths, quats = sample(poses)
-            straddles.append(features(paths, quats if qa is not None else None))
+            straddles.append(features(paths, quats if qa is not None else None, group.turn))
     near = _nearest(group, np.array(straddles)).min(axis=0) if straddles else None
     out = []
     for slot, (k, feats, _, _) in enumerate(members):
@@ -344,7 +392,8 @@ def reject_distances(group: Group, members: list) -> np.ndarray:
         if len(own) < 2:
             spread = 0.0
         else:
-            spread = max(float(dtw_costs(own[j], np.delete(own, j, axis=0)).min()) for j in range(len(own)))
+            loo = [float(dtw_costs(own[j], np.delete(own, j, axis=0)).min()) for j in range(len(own))]
+            spread = max(max(loo), SPREAD_Z * float(np.sqrt(np.mean(np.square(loo)))))
         if near is None:
             out.append(2.0 * spread)
             continue
@@ -513,7 +562,11 @@ class Refiner:
         the part of the motion's path length it covers, the rest at the action's rejection
         distance (what a step nothing explains is worth) — a part of a gesture does not win
         over the whole by matching another gesture's part closely. Unless ``across``, no
-        window holds a pause (what is searched in an unknown run is one motion)."""
+        window holds a pause (what is searched in an unknown run is one motion). A whole
+        motion that fits an action is that action, whatever its parts fit: a part of a
+        gesture (one hook of a combo) may fit another action more closely than the whole
+        fits its own, where a new performer's whole gesture differs more from the examples
+        than its pieces do."""
         from doodle.core.tokens import CODES
 
         names = [k.name for k in self.tokens]
@@ -550,6 +603,10 @@ class Refiner:
         own = np.where(fits, edits + WEIGHT * ds, np.inf)  # each window is the action it is nearest…
         fits &= (own == own.min(axis=1, keepdims=True)) & (ds <= strict * self.shapes.reject[None, :])  # …if that fits
         score = np.where(fits, edits + WEIGHT * cost, np.inf)
+        if motion is not None and tuple(motion) in windows:  # a whole motion that fits is one gesture
+            m = windows.index(tuple(motion))
+            if np.isfinite(score[m]).any():
+                score = np.where(np.arange(len(windows))[:, None] == m, score, np.inf)
         w, k = np.unravel_index(int(np.argmin(score)), score.shape)
         if not np.isfinite(score[w, k]):
             return None
