@@ -318,11 +318,12 @@ TURNS = (0.0, 0.5, 1.0)  # the orientation weights a library chooses among (:fun
 
 def choose_turn(shapes: list, owner: np.ndarray) -> float:
     """The weight of the controllers' orientation in a group's features, chosen on its own
-    examples (``[(action, paths, quats)]``, ``owner`` their actions in order) — leave one
-    example out, each read as its nearest other example's action: the weight in
-    :data:`TURNS` that reads most of them right, and among those the one separating the
-    actions most (the mean ratio of the nearest other action's example to the nearest own
-    one). Orientation tells gestures apart when one person holds the controller the same
+    examples (``[(action, paths, quats)]``, ``owner`` their actions in order), leaving one
+    example out at a time: the weight in :data:`TURNS` that separates the actions most —
+    the mean log ratio of each example's distance to the nearest example of another
+    action over its distance to the nearest of its own (a smooth measure: with three
+    examples per action, how many are read right moves by one or two between weights) —
+    and on a tie the one reading most of them right. Orientation tells gestures apart when one person holds the controller the same
     way each time; examples from several people, each holding it their own way, disagree
     on it, and leaving an example out shows whether they do — nothing is tuned on the
     performances to be recognised."""
@@ -340,7 +341,7 @@ def choose_turn(shapes: list, owner: np.ndarray) -> float:
             right += int(rest[int(np.argmin(costs))] == owner[i])
             if len(own) and len(other):
                 ratios.append(other.min() / max(own.min(), 1e-9))
-        score = (right, float(np.mean(np.log(ratios))) if ratios else 0.0)
+        score = (float(np.mean(np.log(ratios))) if ratios else 0.0, right)
         if key is None or score > key:
             best, key = turn, score
     return best
