@@ -2,7 +2,7 @@
 
 import sys
 
-from bench import (animation_check, bvh_speed, contexter_speed, laban_effort, learning_protocol, matcher_speed, performers, real_gestures,
+from bench import (animation_check, batch_compile, bvh_speed, contexter_speed, laban_effort, learning_protocol, matcher_speed, performers, real_gestures,
                    render_speed, replay_latency, segmenter_speed, stages_accuracy, stylize_signatures, stylize_speed,
                    terrain_speed)
 
@@ -38,6 +38,8 @@ def main() -> int:
     contexter_speed.main()
     print()
     animation_check.main()
+    print()
+    batch_compile.main([])
     return 0
 
 

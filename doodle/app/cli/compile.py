@@ -1,16 +1,21 @@
-"""``doodle compile``: a doodle into BVH (one file per track), report.json and previews."""
+"""``doodle compile``: a doodle into BVH (one file per track), report.json and previews; several
+doodles (or folders of them) at once on Dask (:mod:`doodle.app.batch`)."""
 
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 from doodle.core.errors import DoodleError
 from doodle.app.cli.options import input_options, library_options, load_input, progress_bar, segmenter_options, segmenter_params
 
 
 def add_parser(sub) -> None:
-    p = sub.add_parser("compile", help="compile a doodle into BVH animation (one file per track) and report.json")
-    p.add_argument("file", metavar="FILE")
+    p = sub.add_parser("compile", help="compile a doodle into BVH animation (one file per track) and report.json; "
+                                       "several doodles, or folders of them, at once")
+    p.add_argument("files", nargs="+", metavar="FILE",
+                   help="a doodle file (.doodle, or .csv with --convention); several files, or folders (every "
+                        ".doodle and .csv file in them), are compiled in parallel, each into OUTDIR/STEM/")
     p.add_argument("-o", "--output", required=True, metavar="OUTDIR",
                    help="folder of the output (made if missing): TRACK.bvh, report.json and the previews are "
                         "replaced, together, when the compile succeeds; other files in it are left alone")
@@ -37,27 +42,26 @@ def add_parser(sub) -> None:
     p.add_argument("--retime", choices=["uniform", "gesture"], default="uniform",
                    help="one-shot clips at an even pace (default) or following the hand's own timing (5.3.3)")
     segmenter_options(p)
+    g = p.add_argument_group("several files (on Dask)")
+    g.add_argument("--workers", type=int, metavar="N",
+                   help="local worker processes (default: the number of CPUs, at most one per file)")
+    g.add_argument("--scheduler", metavar="ADDRESS",
+                   help="a running Dask scheduler (tcp://HOST:8786) whose workers compile instead of local ones")
     p.set_defaults(run=cmd_compile)
 
 
 def cmd_compile(args) -> int:
-    from doodle.core.files import atomic_files, atomic_write, check_dir
-    from doodle.app.pipeline import check_edits, compile_doodle, quality
-    from doodle.app.report import compiled as compiled_report
-    from retarget.bvh import write_bvh
-    from retarget.qa import check_scene
+    from doodle.app.batch import is_batch
 
-    from retarget.terrain import parse_terrain
+    if is_batch(args.files):
+        return cmd_compile_batch(args)
+    report, checks = compile_scene(args.files[0], args.output, args, progress_bar("segments"))
+    print_compiled(report, checks, args)
+    return 0
 
-    out = check_dir(args.output)
-    params, mounts = segmenter_params(args)
-    terrain = parse_terrain(args.terrain) if args.terrain else None
-    doodle = load_input(args.file, args, mounts)
-    from doodle.app.pipeline import read_edits
 
-    qualities = read_edits(args.edits) if args.edits else {}
-    if args.edits:
-        check_edits(args.edits, qualities, {name: None for name in doodle.names})
+def check_numbers(args) -> None:
+    """The numeric options in their ranges (a DoodleError naming the option if not)."""
     for name, value in (("--time", args.time), ("--weight", args.weight)):
         if not -1.0 <= value <= 1.0:
             raise DoodleError(f"{name} must be between -1 and 1, not {value:g}")
@@ -66,6 +70,30 @@ def cmd_compile(args) -> int:
             raise DoodleError(f"{name} must be a positive number, not {value:g}")
     if not args.threshold >= 0:
         raise DoodleError(f"--threshold must be 0 or more, not {args.threshold:g}")
+
+
+def compile_scene(file, output, args, progress=None) -> tuple[dict, dict]:
+    """Compile the doodle ``file`` into the folder ``output`` with the options ``args``:
+    every file of the output written together at the end (or none). Returns the report
+    (as written to report.json) and the animation check of each track."""
+    from doodle.core.files import atomic_files, atomic_write, check_dir
+    from doodle.app.pipeline import check_edits, compile_doodle, quality
+    from doodle.app.report import compiled as compiled_report
+    from retarget.bvh import write_bvh
+    from retarget.qa import check_scene
+
+    from retarget.terrain import parse_terrain
+
+    out = check_dir(output)
+    params, mounts = segmenter_params(args)
+    terrain = parse_terrain(args.terrain) if args.terrain else None
+    doodle = load_input(file, args, mounts)
+    from doodle.app.pipeline import read_edits
+
+    qualities = read_edits(args.edits) if args.edits else {}
+    if args.edits:
+        check_edits(args.edits, qualities, {name: None for name in doodle.names})
+    check_numbers(args)
     if args.time or args.weight:
         qualities.setdefault((None, None), (args.time, args.weight))
     effort_model = None
@@ -75,13 +103,13 @@ def cmd_compile(args) -> int:
         effort_model = load_effort_model(args.effort_model)
     results = compile_doodle(doodle, args.library, not args.no_builtin, params, args.fps, args.scale, args.threshold,
                              not args.no_foot_pinning, terrain, args.jump_arc, args.retime, qualities, args.style,
-                             effort_model, progress_bar("segments"))
+                             effort_model, progress)
     if args.edits:
         check_edits(args.edits, qualities, {r.track: len(r.segments) for r in results})
     paths = {r.track: out / f"{r.track}.bvh" for r in results}
     checks = check_scene({r.track: r.motion for r in results}, terrain, contacts=results[0].contacts,
                          soles={r.track: r.sole for r in results})
-    report = compiled_report(args.file, args.fps, args.terrain, results, paths, {r.track: quality(r) for r in results},
+    report = compiled_report(file, args.fps, args.terrain, results, paths, {r.track: quality(r) for r in results},
                              checks)
     with atomic_files() as staged:  # every file of the output replaced at the end, or none
         for r in results:
@@ -98,6 +126,12 @@ def cmd_compile(args) -> int:
                 preview_sheet(results, terrain, staged(out / "render.png"), args.fps)
                 report["preview"].append(str(out / "render.png"))
         atomic_write(staged(out / "report.json"), [json.dumps(report, indent=2) + "\n"])
+    return report, checks
+
+
+def print_compiled(report: dict, checks: dict, args) -> None:
+    """What ``doodle compile FILE`` prints: per track its BVH, check and metrics; the report."""
+    out = Path(args.output)
     for name, tr in report["tracks"].items():
         m = tr["metrics"]
         print(f"{tr['bvh']}: {tr['frames']} frames at {args.fps:g} fps; "
@@ -106,4 +140,49 @@ def cmd_compile(args) -> int:
         print(f"  ground penetration {m['ground_penetration_m']} m, root deviation {m['root_deviation_m']} m, "
               f"transition smoothness {m['transition_smoothness']}")
     print(f"{out / 'report.json'}" + (f"; preview: {', '.join(report['preview'])}" if args.preview else ""))
-    return 0
+
+
+def compiled_counts(file, output, args) -> tuple[int, int]:
+    """One file of a batch (run on a Dask worker): compiled as :func:`compile_scene` does
+    alone, nothing printed; its number of tracks and of frames."""
+    report, _ = compile_scene(file, output, args)
+    return len(report["tracks"]), max((t["frames"] for t in report["tracks"].values()), default=0)
+
+
+def check_batch_options(args) -> None:
+    """What every file of a batch would fail on alike, checked once before any worker starts:
+    the numbers, the calibration, terrain, edits, library and that the effort model is there
+    (read by the workers: loading it here would cost this process a second and a half)."""
+    from doodle.app.cli.options import library_of
+    from doodle.app.pipeline import read_edits
+    from retarget.terrain import parse_terrain
+
+    check_numbers(args)
+    segmenter_params(args)
+    if args.terrain:
+        parse_terrain(args.terrain)
+    if args.edits:
+        read_edits(args.edits)
+    if args.effort_model and not args.no_effort and not Path(args.effort_model).exists():
+        raise DoodleError(f"{args.effort_model}: no such model file")
+    library_of(args)
+
+
+def cmd_compile_batch(args) -> int:
+    from doodle.app import batch
+    from doodle.app.cli.options import EXIT_BAD_INPUT
+    from doodle.core.files import check_dir
+
+    if args.workers is not None and args.scheduler:
+        raise DoodleError("compile: give --workers N or --scheduler ADDRESS, not both")
+    if args.workers is not None and args.workers < 1:
+        raise DoodleError(f"--workers must be 1 or more, not {args.workers}")
+    jobs = batch.plan(batch.expand_inputs(args.files), check_dir(args.output))
+    check_batch_options(args)
+    options = batch.options_for_workers(args)
+    rows = batch.run(jobs, compiled_counts, options, args.workers or batch.default_workers(), args.scheduler,
+                     progress_bar("files"))
+    batch.show_warnings(rows)
+    print("\n".join(batch.table(rows)))
+    print(batch.summary(rows, args.output))
+    return EXIT_BAD_INPUT if any(r.status != "ok" for r in rows) else 0

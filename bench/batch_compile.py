@@ -1,0 +1,199 @@
+"""Batch compiles on Dask (``doodle compile FOLDER``) beside the same files compiled one
+after another in one process.
+
+16 copies of examples/demo.doodle (8.6 s, 11 segments, 259 frames each), compiled:
+
+* one after another in one Python process — ``doodle compile FILE -o OUT/STEM`` for each
+  file, through :func:`doodle.app.cli.main.main`, in a child process;
+* as one batch on a local cluster of 2 worker processes (:func:`doodle.app.batch.run`).
+
+Two comparisons, each the median of ``--runs`` runs (3), taken in turns so that both sides
+see the same load, each beside the target ≥ 1.8× on 2 cores:
+
+* **end to end** — wall time of a fresh process, what a user waits for: ``doodle compile
+  FOLDER -o OUT --workers 2`` (Dask's import, the cluster's start and stop, and every
+  worker's own first compile — imports, the library loaded — included) against the child
+  compiling the files in turn (its start-up and first compile included once);
+* **steady state** — the same 16 compiles once everything is loaded: in turn, after one
+  warm-up compile in that process, against a batch sent to a running 2-worker cluster
+  whose workers have each compiled once (``--scheduler`` path).
+
+OpenBLAS is pinned to one thread everywhere (``OPENBLAS_NUM_THREADS=1``, set for the child
+processes and Dask's workers), so that two workers do not fight over two cores. The
+machine's load average is printed before and after: other work on it takes cores from
+both sides, and most from the parallel one. The batch's outputs are checked to be
+byte-identical to the one-by-one ones.
+
+Run: ``python -m bench.batch_compile [--runs N] [--files N]``.
+"""
+
+from __future__ import annotations
+
+import os
+
+if __name__ == "__main__":  # before numpy is imported; the runs measured are child processes, pinned alike
+    os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+
+import argparse
+import contextlib
+import io
+import shutil
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+DEMO = ROOT / "examples" / "demo.doodle"
+WORKERS = 2
+TARGET = 1.8
+
+
+def make_inputs(folder: Path, n: int) -> list[Path]:
+    folder.mkdir(parents=True, exist_ok=True)
+    files = [folder / f"take{i:02d}.doodle" for i in range(1, n + 1)]
+    for f in files:
+        shutil.copy(DEMO, f)
+    return files
+
+
+def one_by_one(folder: Path, out: Path, warm: bool) -> float:
+    """Every doodle of ``folder`` compiled alone, in turn, in this process (output discarded);
+    after one untimed compile if ``warm``. Seconds of the compiles in turn."""
+    from doodle.app.cli.main import main
+
+    def compile_into(f: Path, folder: Path) -> None:
+        with contextlib.redirect_stdout(io.StringIO()):
+            if main(["compile", str(f), "-o", str(folder / f.stem)]) != 0:
+                raise SystemExit(f"{f}: compile failed")
+
+    files = sorted(folder.glob("*.doodle"))
+    if warm:
+        with tempfile.TemporaryDirectory() as scratch:
+            compile_into(files[0], Path(scratch))
+    start = time.perf_counter()
+    for f in files:
+        compile_into(f, out)
+    return time.perf_counter() - start
+
+
+def _env() -> dict:
+    return dict(os.environ, OPENBLAS_NUM_THREADS="1",
+                PYTHONPATH=os.pathsep.join(filter(None, [str(ROOT), os.environ.get("PYTHONPATH")])))
+
+
+def _child(argv: list[str]) -> tuple[float, str]:
+    """Wall seconds of a child Python process running ``argv``, and what it printed."""
+    start = time.perf_counter()
+    done = subprocess.run([sys.executable, *argv], cwd=ROOT, env=_env(), capture_output=True, text=True)
+    seconds = time.perf_counter() - start
+    if done.returncode != 0:
+        raise SystemExit(f"{' '.join(argv)} failed:\n{done.stdout[-2000:]}{done.stderr[-2000:]}")
+    return seconds, done.stdout
+
+
+def _outputs(out: Path) -> dict:
+    return {str(p.relative_to(out)): p.read_bytes() for p in sorted(out.rglob("*")) if p.is_file()}
+
+
+def _burn(n: int = 8_000_000) -> float:
+    start = time.perf_counter()
+    total = 0
+    for i in range(n):
+        total += i
+    return time.perf_counter() - start
+
+
+def _load() -> str:
+    """The load average, and the cores free for us: a pure-Python loop run in two processes
+    at once against one alone (2.0 on an idle 2-core machine)."""
+    import multiprocessing
+
+    alone = _burn()
+    with multiprocessing.get_context("spawn").Pool(2) as pool:
+        pool.map(abs, [1, 2], chunksize=1)  # both processes started
+        start = time.perf_counter()
+        pool.map(_burn, [8_000_000] * 2, chunksize=1)
+        both = time.perf_counter() - start
+    return f"load average {', '.join(f'{x:.2f}' for x in os.getloadavg())}; free cores ≈ {2 * alone / both:.2f}"
+
+
+def end_to_end(takes: Path, out: Path, runs: int) -> tuple[list, list, bool]:
+    serial, batch, same = [], [], True
+    for _ in range(runs):
+        serial.append(_child(["-m", "bench.batch_compile", "--one-by-one", str(takes), str(out)])[0])
+        alone = _outputs(out)
+        batch.append(_child(["-m", "doodle.app.cli.main", "compile", str(takes), "-o", str(out),
+                             "--workers", str(WORKERS)])[0])
+        same = same and _outputs(out) == alone  # into the same folders: report.json's paths alike
+    return serial, batch, same
+
+
+def steady_state(takes: Path, out: Path, runs: int) -> tuple[list, list]:
+    import logging
+
+    from dask.distributed import LocalCluster
+
+    from doodle.app import batch
+    from doodle.app.cli.compile import compiled_counts
+    from doodle.app.cli.main import build_parser
+
+    args = build_parser().parse_args(["compile", str(takes), "-o", str(out)])
+    jobs, options = batch.plan(batch.expand_inputs(args.files), out), batch.options_for_workers(args)
+    serial, parallel = [], []
+    with LocalCluster(n_workers=WORKERS, threads_per_worker=1, processes=True, dashboard_address=None,
+                      silence_logs=logging.CRITICAL, env={"OPENBLAS_NUM_THREADS": "1"}) as cluster:
+        warm = [batch.Job(jobs[0].file, out / ".warm" / str(i)) for i in range(WORKERS)]
+        batch.run(warm, compiled_counts, options, WORKERS, cluster.scheduler_address)
+        for _ in range(runs):
+            serial.append(float(_child(["-m", "bench.batch_compile", "--one-by-one", str(takes), str(out),
+                                        "--warm"])[1]))
+            start = time.perf_counter()
+            rows = batch.run(jobs, compiled_counts, options, WORKERS, cluster.scheduler_address)
+            parallel.append(time.perf_counter() - start)
+            if any(r.status != "ok" for r in rows):
+                raise SystemExit(f"batch failed: {[r.error for r in rows if r.error]}")
+    return serial, parallel
+
+
+def _line(label: str, serial: list, batch: list, files: int) -> None:
+    s, b = statistics.median(serial), statistics.median(batch)
+    runs = lambda xs: ", ".join(f"{x:.1f}" for x in xs)  # noqa: E731
+    print(f"  {label}")
+    print(f"    one after another, one process  {s:6.1f} s  ({runs(serial)})  {files / s:5.2f} files/s")
+    print(f"    {WORKERS}-worker local cluster          {b:6.1f} s  ({runs(batch)})  {files / b:5.2f} files/s")
+    print(f"    speed-up {s / b:.2f}×  (target ≥ {TARGET}×: {'met' if s / b >= TARGET else 'not met'})")
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(prog="python -m bench.batch_compile")
+    ap.add_argument("--runs", type=int, default=3)
+    ap.add_argument("--files", type=int, default=16)
+    ap.add_argument("--one-by-one", nargs=2, metavar=("FOLDER", "OUT"), help=argparse.SUPPRESS)
+    ap.add_argument("--warm", action="store_true", help=argparse.SUPPRESS)
+    args = ap.parse_args(argv)
+    if args.one_by_one:
+        print(f"{one_by_one(Path(args.one_by_one[0]), Path(args.one_by_one[1]), args.warm):.6f}")
+        return 0
+
+    print(f"Batch compile: {args.files} copies of {DEMO.relative_to(ROOT)}, one after another in one process vs "
+          f"a {WORKERS}-worker local Dask cluster (median of {args.runs}; {os.cpu_count()} CPUs, "
+          "OPENBLAS_NUM_THREADS=1)")
+    print(f"  before: {_load()}")
+    with tempfile.TemporaryDirectory() as tmp:
+        takes, out = Path(tmp) / "takes", Path(tmp) / "out"
+        make_inputs(takes, args.files)
+        serial, batch, same = end_to_end(takes, out, args.runs)
+        warm_serial, warm_batch = steady_state(takes, out, args.runs)
+    print(f"  after:  {_load()}")
+    _line("end to end (fresh processes: start-up, imports, cluster start and stop included)", serial, batch,
+          args.files)
+    _line("steady state (everything loaded; a running cluster)", warm_serial, warm_batch, args.files)
+    print(f"  batch outputs byte-identical to one-by-one: {'yes' if same else 'NO'}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
