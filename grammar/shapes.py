@@ -433,7 +433,10 @@ class Refiner:
     :data:`SPOT_MAX` tokens is searched the same way and reported as a learned action when
     one fits within :data:`SPOT` of its rejection distance. Other segments pass through
     (less any tokens taken). A shaped segment is decided once the pause ending its motion
-    is known (or :data:`SPOT_MAX` tokens have passed without one). The batch form
+    is known (or :data:`SPOT_MAX` tokens have passed without one). An unknown run whose
+    motion goes on, without a pause, into a shaped segment is not searched: it waits, and
+    that segment's windows may take its tokens back (a gesture the Matcher found only the
+    end of is read whole, not as two). The batch form
     (:func:`refine`) is this run to the end, so streaming equals batch.
 
     ``tokens`` is the track's token list (append as the Segmenter gives them); ``p``, ``q``
@@ -452,6 +455,7 @@ class Refiner:
         self._waiting: list = []
         self._done = 0  # tokens before this are decided
         self._unknown = None
+        self._deferred = False  # the pending unknown run waits for the segment after it to be searched
 
     def push(self, segments: list) -> list:
         """Segments from the Matcher (in order) → segments decided so far."""
@@ -463,7 +467,12 @@ class Refiner:
         return out
 
     def _ready(self) -> bool:
+        from grammar.matcher import UNKNOWN
+
         first = self._waiting[0]
+        if first.action == UNKNOWN and first.stop - max(first.first, self._done) >= SPOT_TOKENS:
+            # spotted in only if its motion does not go on into the next segment: wait for that
+            return len(self._waiting) >= 2 and len(self.tokens) > first.stop
         if first.action not in self.shapes.names:
             return True
         if len(self._waiting) < 2:  # the next segment decides how far a window may reach
@@ -489,13 +498,13 @@ class Refiner:
         first = max(seg.first, self._done)
         if first >= seg.stop:
             return []
+        continues = (after is not None and after.action in self.shapes.names and seg.stop < len(self.tokens)
+                     and self.tokens[seg.stop].name != "T_STILL")  # into a shaped segment, no pause between
         if seg.action == UNKNOWN and SPOT_TOKENS <= seg.stop - first <= SPOT_MAX:
-            moving = [i for i in range(first, seg.stop) if self.tokens[i].name != "T_STILL"]
-            motion = None  # a run that is one motion between pauses is read whole, as a shaped segment's
-            if moving and all(self.tokens[i].name != "T_STILL" for i in range(moving[0], moving[-1] + 1)):
-                motion = (moving[0], moving[-1] + 1)
-            best = self._best(range(first, seg.stop), [(first + 2, seg.stop)], known, SPOT, motion=motion,
-                              across=False)
+            if continues:  # left pending: the next segment may take it back, the rest is searched then
+                self._deferred = True
+                return self._emit(UNKNOWN, first, seg.stop, False, None)
+            best = self._spot(first, seg.stop, known)
         elif seg.action in self.shapes.names:
             pending = self._unknown is not None and self._unknown.stop == first
             lowest = self._unknown.first if pending else first  # it may take back tokens of an unknown run
@@ -515,14 +524,43 @@ class Refiner:
         else:
             return self._emit(seg.action, first, seg.stop, seg.exact, seg.distance)
         if best is None:
-            return self._emit(UNKNOWN, first, seg.stop, False, None)
+            return self._spot_deferred(first, known) + self._emit(UNKNOWN, first, seg.stop, False, None)
         f, e, k, edits = best
         if f < first:  # taken back from the pending unknown run
             pending = self._unknown
             self._unknown = None if f <= pending.first else replace(pending, stop=f, end=self.tokens[f - 1].end)
             self._done = f
-        return (self._emit(UNKNOWN, first, f, False, None) + self._emit(self.shapes.names[k], f, e, edits == 0.0, edits)
-                + self._emit(UNKNOWN, e, seg.stop, False, None))
+        return (self._spot_deferred(min(f, first), known) + self._emit(UNKNOWN, first, f, False, None)
+                + self._emit(self.shapes.names[k], f, e, edits == 0.0, edits) + self._emit(UNKNOWN, e, seg.stop, False, None))
+
+    def _spot(self, a: int, b: int, known: int):
+        """The learned action that tokens a..b of an unknown run hold, as :meth:`_best` finds it
+        within :data:`SPOT` of its rejection distance — a run that is one motion between
+        pauses read whole, as a shaped segment's —, or None."""
+        moving = [i for i in range(a, b) if self.tokens[i].name != "T_STILL"]
+        motion = None
+        if moving and all(self.tokens[i].name != "T_STILL" for i in range(moving[0], moving[-1] + 1)):
+            motion = (moving[0], moving[-1] + 1)
+        return self._best(range(a, b), [(a + 2, b)], known, SPOT, motion=motion, across=False)
+
+    def _spot_deferred(self, done: int, known: int) -> list:
+        """The pending unknown run left for the segment after it (what that segment did not
+        take back) searched now; its found action emitted, the rest left pending. ``done``:
+        where decided tokens end once the segment is emitted."""
+        from grammar.matcher import UNKNOWN
+
+        pending, deferred, self._deferred = self._unknown, self._deferred, False
+        if pending is None or not deferred or not SPOT_TOKENS <= pending.stop - pending.first <= SPOT_MAX:
+            return []
+        best = self._spot(pending.first, pending.stop, known)
+        if best is None:
+            return []
+        f, e, k, edits = best
+        self._unknown = None if f <= pending.first else replace(pending, stop=f, end=self.tokens[f - 1].end)
+        out = self._emit(self.shapes.names[k], f, e, edits == 0.0, edits)
+        out += self._emit(UNKNOWN, e, pending.stop, False, None)
+        self._done = done
+        return out
 
     def _motion(self, seg, known: int, closed: bool):
         """The tokens ``(a, b)`` of the motion a shaped segment lies in: from the last pause
