@@ -23,7 +23,8 @@ def add_parser(sub) -> None:
 def cmd_recognize(args) -> int:
     from doodle.app.report import recognized, seconds_of
     from grammar.contexter import Refused
-    from grammar.recognizer import load_actions, recognize
+    from doodle.app.libcache import compiled_actions as load_actions
+    from grammar.recognizer import recognize
 
     params, mounts = segmenter_params(args)
     compiled = load_actions(args.library, not args.no_builtin)

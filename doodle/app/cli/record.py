@@ -85,7 +85,7 @@ class _View:
 
 
 def cmd_record(args) -> int:
-    from grammar.recognizer import load_actions
+    from doodle.app.libcache import compiled_actions as load_actions
     from doodle.app.recorder import record
     from doodle.core.files import output_dir, output_file
 
