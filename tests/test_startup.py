@@ -113,6 +113,21 @@ def test_find_peaks_checks_its_input_like_scipy():
         find_peaks(np.arange(5.0), height=np.zeros(4))
 
 
+def test_the_front_of_quaternions_equals_scipys_to_the_bit():
+    from scipy.spatial.transform import Rotation
+
+    from doodle.core.quat import front
+    from doodle.input.loader import load
+
+    rng = np.random.default_rng(3)
+    q = np.concatenate([rng.normal(size=(20000, 4)), rng.normal(size=(2000, 4)) * 1e-150,
+                        load(DEMO).tracks[0].q, [[0.0, 0.0, 0.0, 1.0], [0.0, 1.0, 0.0, 0.0]]])
+    assert np.array_equal(front(q), Rotation.from_quat(q).apply([0.0, 0.0, 1.0]))
+    assert np.array_equal(front(q[7]), Rotation.from_quat(q[7]).apply([0.0, 0.0, 1.0]))
+    with pytest.raises(ValueError):
+        front(np.zeros(4))
+
+
 # --- what is imported ---------------------------------------------------------------------------
 
 HEAVY = ("pandas", "sklearn", "scipy.signal", "scipy.stats", "matplotlib", "trimesh", "hmmlearn.hmm")
@@ -139,6 +154,13 @@ def test_a_compile_imports_no_library_it_does_not_use(tmp_path):
     warm = _imported(f"from doodle.app.cli.main import main; main(['compile', {str(DEMO)!r}, '-o', "
                      f"{str(tmp_path / 'out')!r}])", tmp_path)  # the cache filled above
     assert "lark" not in warm  # the automata come from the cache: no expression parsed
+
+
+def test_recognising_from_the_cache_imports_no_scipy(tmp_path):
+    code = f"from doodle.app.cli.main import main; main(['recognize', {str(DEMO)!r}])"
+    _imported(code, tmp_path)  # the automata cached
+    mods = _imported(code, tmp_path)
+    assert not {m for m in mods if m.split(".")[0] in ("scipy", "lark", "pandas", "sklearn")}
 
 
 # --- the cache ----------------------------------------------------------------------------------

@@ -5,7 +5,8 @@ stages, cycle length, foot contacts, travel direction).
 
 Three kinds of entry, each named by a hash of what it is derived from, the code that derives
 it (:func:`code_version`: the source of ``doodle.core``, ``grammar``, ``retarget``,
-``library``, the pipeline and this module; numpy's and scipy's versions) and :data:`FORMAT`:
+``library``, the pipeline and this module; numpy's version, and scipy's for the clips) and
+:data:`FORMAT`:
 
 * ``dfas`` — the minimal DFA of each expression, keyed by the expressions;
 * ``automaton`` — the Matcher's tables (:class:`grammar.matcher.Automaton`) for one
@@ -44,16 +45,14 @@ _VERSION: list[str] = []
 
 
 def code_version() -> str:
-    """A hash of the code whose results are cached (its source files' contents) and of the
-    numerical libraries it runs on."""
+    """A hash of the code whose results are cached (its source files' contents), numpy's
+    version and :data:`FORMAT` (the clips' key adds scipy's)."""
     if not _VERSION:
-        import scipy
-
         files = []
         for part in _CODE:
             path = _ROOT / part
             files += sorted(path.rglob("*.py")) if path.is_dir() else [path]
-        parts = [FORMAT, sys.version_info[:2], np.__version__, scipy.__version__]
+        parts = [FORMAT, sys.version_info[:2], np.__version__]
         for f in files:
             parts += [f.relative_to(_ROOT).as_posix(), f.read_bytes()]
         _VERSION.append(cache.digest(*parts))
@@ -168,9 +167,11 @@ def clips_key(library, user, use_builtin: bool) -> str | None:
     """The key of a library's analysed clips: its definitions, the user library's and the
     built-in one's, and the contents of every file they name; None when a file cannot be
     read (the compile then reports it)."""
+    import scipy  # the analysis runs on it (retarget.analysis, retarget.clips); imported by them anyway
+
     from library.manifest import builtin
 
-    parts = ["clips", code_version(), repr(library), repr(user), use_builtin]
+    parts = ["clips", code_version(), scipy.__version__, repr(library), repr(user), use_builtin]
     libraries = [library] + ([user] if user is not None else [])
     if use_builtin and user is not None:
         base = builtin()
