@@ -374,3 +374,22 @@ def test_old_entries_are_pruned_and_nothing_else_touched(cache_dir):
     left = _entries(cache_dir, "dfas")
     assert len(left) == cache.KEEP and cache_dir.joinpath("notes.npz").read_bytes() == b"mine"
     assert {p.stem.split("-")[2] for p in left} == {cache.digest(k) for k in range(3, cache.KEEP + 3)}
+
+
+# --- forward kinematics kept per clip -------------------------------------------------------------
+
+def test_forward_kinematics_is_kept_read_only_for_clips_and_computed_for_long_motions():
+    from retarget.bvh import read_bvh
+    from retarget.skeleton import FK_CACHED, Motion, _kinematics, forward_kinematics
+
+    clip = read_bvh(BUILTIN_CLIPS / "walk.bvh")
+    first, again = forward_kinematics(clip), forward_kinematics(clip)
+    assert first[0] is again[0] and first[1] is again[1]
+    assert not first[0].flags.writeable and not first[1].flags.writeable
+    fresh = _kinematics(clip)
+    assert np.array_equal(first[0], fresh[0]) and np.array_equal(first[1], fresh[1])
+    repeat = int(np.ceil((FK_CACHED + 1) / (clip.frames * len(clip.skeleton))))
+    long = Motion(clip.skeleton, np.tile(clip.translations, (repeat, 1, 1)), np.tile(clip.rotations, (repeat, 1, 1)),
+                  clip.frame_time)
+    a, b = forward_kinematics(long), forward_kinematics(long)
+    assert a[0] is not b[0] and a[0].flags.writeable and np.array_equal(a[0], b[0])
