@@ -44,19 +44,28 @@ _CODE = ("doodle/core", "grammar", "retarget", "library", "doodle/app/libcache.p
 _VERSION: list[str] = []
 
 
-def code_version() -> str:
+def code_version() -> str | None:
     """A hash of the code whose results are cached (its source files' contents), numpy's
-    version and :data:`FORMAT` (the clips' key adds scipy's)."""
+    version and :data:`FORMAT` (the clips' key adds scipy's); None when the sources cannot
+    be read (an unusual installation: then nothing is cached)."""
     if not _VERSION:
-        files = []
-        for part in _CODE:
-            path = _ROOT / part
-            files += sorted(path.rglob("*.py")) if path.is_dir() else [path]
-        parts = [FORMAT, sys.version_info[:2], np.__version__]
-        for f in files:
-            parts += [f.relative_to(_ROOT).as_posix(), f.read_bytes()]
-        _VERSION.append(cache.digest(*parts))
+        try:
+            files = []
+            for part in _CODE:
+                path = _ROOT / part
+                files += sorted(path.rglob("*.py")) if path.is_dir() else [path]
+            parts = [FORMAT, sys.version_info[:2], np.__version__]
+            for f in files:
+                parts += [f.relative_to(_ROOT).as_posix(), f.read_bytes()]
+            _VERSION.append(cache.digest(*parts))
+        except OSError:
+            _VERSION.append(None)
     return _VERSION[0]
+
+
+def usable() -> bool:
+    """Whether the cache is on (a folder, :mod:`doodle.core.cache`) and the code's version known."""
+    return cache.folder() is not None and code_version() is not None
 
 
 def _header(arrays: dict, kind: str, key: str) -> dict:
@@ -144,7 +153,7 @@ def compile_library(library):
     they are first built. Without a cache folder (``DOODLE_NO_CACHE``), just compiled."""
     from grammar.library import compile_library as compile_
 
-    if cache.folder() is None:
+    if not usable():
         return compile_(library)
     key, known = read_dfas(library)
     compiled = compile_(library, known)

@@ -68,10 +68,9 @@ def load_for_compile(library_dir=None, use_builtin: bool = True, cache: bool = T
     :mod:`doodle.core.cache`), the analysed clips and the automata are read back from the
     last run on the same files (:mod:`doodle.app.libcache`) — the same values."""
     from doodle.app import libcache
-    from doodle.core.cache import folder
 
     library, user = load_combined(library_dir, use_builtin)
-    key = libcache.clips_key(library, user, use_builtin) if cache and folder() is not None else None
+    key = libcache.clips_key(library, user, use_builtin) if cache and libcache.usable() else None
     stored = libcache.read_clips(key) if key is not None else None
     if stored is not None:
         clips, directions, said = stored
