@@ -2,13 +2,15 @@
 
 import sys
 
-from bench import (animation_check, batch_compile, bvh_speed, contexter_speed, laban_effort, learning_protocol, matcher_speed, performers, real_gestures,
-                   render_speed, replay_latency, segmenter_speed, stages_accuracy, stylize_signatures, stylize_speed,
-                   terrain_speed)
+from bench import (animation_check, batch_compile, bvh_speed, contexter_speed, laban_effort, learning_protocol,
+                   matcher_speed, performers, real_gestures, render_speed, replay_latency, segmenter_speed,
+                   stages_accuracy, startup, stylize_signatures, stylize_speed, terrain_speed)
 
 
 def main() -> int:
     print("Spatial motion doodles — benchmarks\n")
+    startup.main([])
+    print()
     segmenter_speed.main()
     print()
     real_gestures.main()

@@ -30,8 +30,8 @@ import re
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.spatial.transform import Rotation
 
+from doodle.core import quat
 from doodle.core.errors import DoodleError
 
 RADIUS = 0.1  # metres: bounding-sphere radius of a character in doodle (prop) space
@@ -52,8 +52,7 @@ class State:
 def ground_front(q) -> np.ndarray:
     """The figurine's front (local +z) of quaternion(s) xyzw, on the ground plane, unit
     (zero where it points straight up or down). Works on (4,) or (n, 4)."""
-    f = Rotation.from_quat(np.asarray(q, dtype=float)).apply([0.0, 0.0, 1.0])
-    f = np.array(f, dtype=float)
+    f = quat.front(np.asarray(q, dtype=float))  # scipy Rotation's, to the bit
     f[..., 1] = 0.0
     n = np.linalg.norm(f, axis=-1, keepdims=True)
     return np.where(n > 1e-6, f / np.maximum(n, 1e-12), 0.0)

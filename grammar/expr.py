@@ -14,8 +14,6 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from lark import Lark, Token, Transformer, UnexpectedEOF, UnexpectedInput
-
 from doodle.core.errors import DoodleError
 from doodle.core.tokens import CODES, NAMES
 
@@ -55,39 +53,49 @@ NAME: /[A-Za-z][A-Za-z0-9_]*/
 """
 
 
-class _Build(Transformer):
-    def __init__(self, action: str):
-        super().__init__()
-        self.action = action
-
-    def NAME(self, tok: Token):
-        code = CODES.get(str(tok))
-        if code is None:
-            raise DoodleError(f"action {self.action!r}: column {tok.column}: unknown token {str(tok)!r}")
-        return Sym(code)
-
-    def alt(self, children):
-        return Alt(tuple(o for c in children for o in (c.options if isinstance(c, Alt) else (c,))))
-
-    def cat(self, children):
-        return Cat(tuple(p for c in children for p in (c.parts if isinstance(c, Cat) else (c,))))
-
-    def rep(self, children):
-        node = children[0]
-        for op in children[1:]:
-            node = Repeat(node, 1 if op == "+" else 0, op != "?")
-        return node
+_LARK: dict = {}  # the parser and the tree builder, made on the first parse: a compile whose
+# automata come from the cache (doodle.app.libcache) never imports lark nor builds its tables
 
 
-_PARSER = Lark(_GRAMMAR, parser="lalr", maybe_placeholders=False)
+def _lark() -> dict:
+    if not _LARK:
+        from lark import Lark, Token, Transformer
+
+        class Build(Transformer):
+            def __init__(self, action: str):
+                super().__init__()
+                self.action = action
+
+            def NAME(self, tok: Token):
+                code = CODES.get(str(tok))
+                if code is None:
+                    raise DoodleError(f"action {self.action!r}: column {tok.column}: unknown token {str(tok)!r}")
+                return Sym(code)
+
+            def alt(self, children):
+                return Alt(tuple(o for c in children for o in (c.options if isinstance(c, Alt) else (c,))))
+
+            def cat(self, children):
+                return Cat(tuple(p for c in children for p in (c.parts if isinstance(c, Cat) else (c,))))
+
+            def rep(self, children):
+                node = children[0]
+                for op in children[1:]:
+                    node = Repeat(node, 1 if op == "+" else 0, op != "?")
+                return node
+
+        _LARK.update(parser=Lark(_GRAMMAR, parser="lalr", maybe_placeholders=False), build=Build)
+    return _LARK
 
 
 def parse(text: str, action: str = "?") -> object:
     """The expression tree of ``text``; DoodleError naming ``action`` and the column."""
     if not text.strip():
         raise DoodleError(f"action {action!r}: empty expression")
+    from lark import Token, UnexpectedEOF, UnexpectedInput
+
     try:
-        tree = _PARSER.parse(text)
+        tree = _lark()["parser"].parse(text)
     except UnexpectedInput as e:
         at_end = isinstance(e, UnexpectedEOF) or getattr(getattr(e, "token", None), "type", "") == "$END"
         if at_end:
@@ -96,7 +104,8 @@ def parse(text: str, action: str = "?") -> object:
         found = text[e.pos_in_stream] if e.pos_in_stream is not None and e.pos_in_stream < len(text) else "?"
         raise DoodleError(f"action {action!r}: column {e.column}: unexpected {found!r} in {text!r}") from None
     try:
-        return _Build(action).transform(tree) if not isinstance(tree, Token) else _Build(action).NAME(tree)
+        build = _lark()["build"](action)
+        return build.transform(tree) if not isinstance(tree, Token) else build.NAME(tree)
     except DoodleError:
         raise
     except Exception as e:  # lark wraps errors raised inside the transformer

@@ -23,6 +23,9 @@ class Compiled:
     roles: "Compiled | None" = None  # interaction-only actions, matched by the Contexter
     shapes: ShapeSet | None = None  # the learned actions' example shapes (grammar.shapes)
     _tables: dict = field(default_factory=dict, repr=False)  # the Matcher's tables, built once per kind
+    store: object = field(default=None, repr=False, compare=False)  # where built tables are kept between
+    # runs, or None: ``get(compiled, key, build)`` returns the automaton of ``key`` (made by
+    # ``build()`` if it has none; see automaton_from) — the app's disk cache, doodle.app.libcache
 
     def automaton(self, threshold: float = 2.0, direction_costs: bool = False, track: str | None = None,
                   present=None) -> Automaton | None:
@@ -31,10 +34,18 @@ class Compiled:
         when a track has no action of its own (it only partners two-handed actions)."""
         key = (threshold, direction_costs, track, None if present is None else tuple(sorted(present)))
         if key not in self._tables:
-            self._tables[key] = self._automaton(threshold, direction_costs, track, present)
+            build = lambda: self._automaton(threshold, direction_costs, track, present)  # noqa: E731
+            self._tables[key] = build() if self.store is None else self.store.get(self, key, build)
         return self._tables[key]
 
-    def _automaton(self, threshold, direction_costs, track, present) -> Automaton | None:
+    def automaton_from(self, key: tuple, tables: dict) -> Automaton | None:
+        """The automaton of ``key`` (as :meth:`automaton` makes it: threshold, direction
+        costs, track, present tracks) with its step tables taken from ``tables``
+        (:meth:`grammar.matcher.Automaton.tables`): what a cache reads back."""
+        threshold, direction_costs, track, present = key
+        return self._automaton(threshold, direction_costs, track, present, tables)
+
+    def _automaton(self, threshold, direction_costs, track, present, tables=None) -> Automaton | None:
         keep = [k for k, a in enumerate(self.library.actions) if (track is None or a.track in (None, track))
                 and (present is None or all(t in present for t in a.tracks))]
         if not keep:
@@ -44,7 +55,8 @@ class Compiled:
         actions = [self.library.actions[k] for k in keep]
         return Automaton([a.name for a in actions], [self.dfas[k] for k in keep], threshold, direction_costs,
                          [a.cyclic for a in actions],
-                         limits=[a.tolerance if a.tolerance is not None else threshold for a in actions])
+                         limits=[a.tolerance if a.tolerance is not None else threshold for a in actions],
+                         tables=tables)
 
     @property
     def bound(self) -> bool:
@@ -58,8 +70,11 @@ class Compiled:
         return self.library.action(name)
 
 
-def compile_action(action: ActionDef) -> DFA:
-    """The minimal DFA of one action; DoodleError naming the manifest, action and column."""
+def compile_action(action: ActionDef, known: dict | None = None) -> DFA:
+    """The minimal DFA of one action; DoodleError naming the manifest, action and column.
+    ``known``: DFAs already compiled, by expression text (read back from a cache)."""
+    if known and action.expression in known:
+        return known[action.expression]
     try:
         dfa = compile_expression(parse(action.expression, action.name))
         check_language(dfa, action.name)
@@ -68,9 +83,10 @@ def compile_action(action: ActionDef) -> DFA:
     return dfa
 
 
-def compile_library(library: Library) -> Compiled:
+def compile_library(library: Library, known: dict | None = None) -> Compiled:
     """Automata of the library's recognisable actions (those with an expression); an
-    interaction naming an unknown action is an error."""
+    interaction naming an unknown action is an error. ``known``: DFAs already compiled, by
+    expression text (:func:`compile_action`)."""
     names = set(library.names)
     for inter in library.interactions:
         for a in inter.actions:
@@ -94,7 +110,7 @@ def compile_library(library: Library) -> Compiled:
                 raise DoodleError(f"{a.source}: action {a.name!r}: its shape file {a.shape} holds "
                                   f"{paths.shape[1]} track(s), its 'tracks' name {max(1, len(a.tracks))}")
             named[a.name] = (paths, quats)
-    return Compiled(recognisable, tuple(compile_action(a) for a in recognisable.actions), compile_roles(library),
+    return Compiled(recognisable, tuple(compile_action(a, known) for a in recognisable.actions), compile_roles(library, known),
                     shape_set(named, {a.name: a.expression for a in recognisable.actions},
                               {a.name: a.track for a in recognisable.actions},
                               partners={a.name: a.tracks[1:] for a in recognisable.actions if a.tracks}))
@@ -116,14 +132,14 @@ def _check_invertible(library: Library) -> None:
                               "(add an action with sets = [...])")
 
 
-def compile_roles(library: Library) -> Compiled | None:
+def compile_roles(library: Library, known: dict | None = None) -> Compiled | None:
     """The automata of the actions that are only roles of interactions (``interaction_only``:
     the Contexter matches them; independent recognition never does), or None."""
     roles = tuple(a for a in library.actions if a.interaction_only and a.expression.strip())
     if not roles:
         return None
     lib = Library(library.name, roles, library.source, library.roles, library.interactions, library.states)
-    return Compiled(lib, tuple(compile_action(a) for a in roles))
+    return Compiled(lib, tuple(compile_action(a, known) for a in roles))
 
 
 @dataclass(frozen=True)

@@ -130,7 +130,10 @@ class Automaton:
     """The DFAs of a list of actions stacked for vectorised edit-distance steps."""
 
     def __init__(self, names: list[str], dfas: list[DFA], threshold: float = 2.0, direction_costs: bool = False,
-                 cyclic: list[bool] | None = None, protect_still: bool = True, limits: list[float] | None = None):
+                 cyclic: list[bool] | None = None, protect_still: bool = True, limits: list[float] | None = None,
+                 tables: dict | None = None):
+        """``tables``: what :meth:`tables` returned for an automaton of the same arguments
+        (read back from a cache): the step tables are taken from it instead of computed."""
         if not names:
             raise ValueError("no actions to match")
         # per action, the edit distance it may be matched within (learned actions carry
@@ -147,6 +150,9 @@ class Automaton:
         self.starts = offsets[:-1].copy()
         self.accept = np.concatenate([d.accept for d in dfas])
         self.cap = self.threshold + 1.0
+        if tables is not None:
+            self._restore(tables)
+            return
         costs = substitution_costs(direction_costs)
         delete = np.ones(N_CODES)
         if protect_still:  # a pause is never noise: a T_STILL read must be matched by T_STILL
@@ -192,6 +198,30 @@ class Automaton:
             self.step_off.append(np.searchsorted(dst[order], states))
             self.step_cost.append(cost[order])
         self.sizes_counted = np.array([_string_counts(d, MAX_COUNTED).sum() for d in dfas])  # specificity
+
+    def tables(self) -> dict[str, np.ndarray]:
+        """The computed tables as plain arrays (the per-token ones concatenated, with their
+        lengths), for a cache: ``Automaton(..., tables=automaton.tables())`` is this automaton."""
+        return {"initial": self.initial, "sizes_counted": self.sizes_counted,
+                "step_lengths": np.array([len(a) for a in self.step_src], dtype=np.int64),
+                "step_src": np.concatenate(self.step_src), "step_cost": np.concatenate(self.step_cost),
+                "step_off": np.stack(self.step_off)}
+
+    def _restore(self, tables: dict) -> None:
+        """The tables of :meth:`tables`, checked against this automaton's shape (ValueError if
+        they do not fit: a cache entry of another automaton)."""
+        lengths = np.asarray(tables["step_lengths"])
+        src, cost, off = (np.asarray(tables[k]) for k in ("step_src", "step_cost", "step_off"))
+        initial, counted = np.asarray(tables["initial"], dtype=float), np.asarray(tables["sizes_counted"], dtype=float)
+        if (lengths.shape != (N_CODES,) or lengths.min() < self.n or src.shape != (int(lengths.sum()),)
+                or cost.shape != src.shape or off.shape != (N_CODES, self.n) or initial.shape != (self.n,)
+                or counted.shape != (len(self.names),) or src.min() < 0 or src.max() >= self.n):
+            raise ValueError("automaton tables do not fit")
+        cuts = np.cumsum(lengths)[:-1]
+        self.initial, self.sizes_counted = initial, counted
+        self.step_src = [a.astype(np.int64) for a in np.split(src, cuts)]
+        self.step_cost = [a.astype(float) for a in np.split(cost, cuts)]
+        self.step_off = [a.astype(np.int64) for a in off]
 
     def most_specific(self, candidates: np.ndarray) -> int:
         """Among candidate actions, the one with the narrowest language: the fewest accepted

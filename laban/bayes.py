@@ -12,7 +12,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from sklearn.naive_bayes import GaussianNB
 
 from laban.selection import normalise, ranking
 
@@ -45,6 +44,8 @@ class Binary:
 
 def fit_binary(X: np.ndarray, y: np.ndarray, features: np.ndarray) -> Binary:
     """Eq. 4.12's means and variances on the chosen columns, normalised to [0, 1]."""
+    from sklearn.naive_bayes import GaussianNB  # training only: scoring needs no scikit-learn
+
     features = np.asarray(features, dtype=int)
     Z, lo, hi = normalise(X[:, features])
     nb = GaussianNB(priors=[0.5, 0.5]).fit(Z, y)

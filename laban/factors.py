@@ -29,7 +29,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.optimize import minimize_scalar
 
 from laban.features import EFFORT_NAMES, effort_features
 from laban.procedures import Effortful, presented
@@ -83,6 +82,8 @@ def fit_logistic(X: np.ndarray, y: np.ndarray, factor: str, weights: np.ndarray 
 
 def temperature(logits: np.ndarray, y: np.ndarray) -> float:
     """The T minimising the negative log-likelihood of labels ``y`` (±1) under σ(logit / T)."""
+    from scipy.optimize import minimize_scalar  # calibration only
+
     z = np.asarray(logits, float) * np.where(np.asarray(y) > 0, 1.0, -1.0)
 
     def nll(log_t):

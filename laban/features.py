@@ -419,7 +419,7 @@ def effort_signal(t: np.ndarray, p: np.ndarray) -> tuple[np.ndarray, np.ndarray,
 def _strokes(speed: np.ndarray) -> int:
     """Speed peaks of at least STROKE_FLOOR of the largest that stand out by a prominence of
     STROKE_DIP of it (a dip between strokes, not a wobble)."""
-    from scipy.signal import find_peaks
+    from doodle.core.peaks import find_peaks  # scipy.signal's, without its import
 
     top = float(speed.max())
     padded = np.concatenate([[0.0], speed, [0.0]])  # a movement starting or ending fast still peaks

@@ -41,8 +41,8 @@ from functools import lru_cache
 
 import numpy as np
 from scipy.ndimage import gaussian_filter1d
-from scipy.signal import find_peaks
 
+from doodle.core.peaks import find_peaks
 from retarget.skeleton import Motion, Skeleton, end_site_positions, forward_kinematics
 
 ROLE_PATTERNS = {

@@ -13,6 +13,7 @@ are quaternions. World frame: right-handed, +y up.
 from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
+from functools import lru_cache
 
 import numpy as np
 from scipy.spatial.transform import Rotation
@@ -91,8 +92,30 @@ class Motion:
         return replace(self, translations=self.translations[start:stop], rotations=self.rotations[start:stop])
 
 
+FK_CACHED = 20_000  # joint-frames: motions up to this size (a clip: ~2,000) keep their forward kinematics
+
+
 def forward_kinematics(motion: Motion) -> tuple[np.ndarray, np.ndarray]:
-    """World positions (F, J, 3) and world rotations (F, J, 4) of every joint."""
+    """World positions (F, J, 3) and world rotations (F, J, 4) of every joint.
+
+    A compile asks for the same clip's many times (its span, entry phase, timing, stylising:
+    ~290 calls on 94 motions for a minute of doodle); a motion of up to :data:`FK_CACHED`
+    joint-frames keeps its result (the 64 most recent), returned read-only — copy before
+    changing it. Motions are never changed in place, so the result stays true."""
+    if motion.frames * len(motion.skeleton) <= FK_CACHED:
+        return _kept_kinematics(motion)
+    return _kinematics(motion)
+
+
+@lru_cache(maxsize=64)
+def _kept_kinematics(motion: Motion) -> tuple[np.ndarray, np.ndarray]:
+    positions, rotations = _kinematics(motion)
+    positions.flags.writeable = False
+    rotations.flags.writeable = False
+    return positions, rotations
+
+
+def _kinematics(motion: Motion) -> tuple[np.ndarray, np.ndarray]:
     from doodle.core import quat
 
     sk = motion.skeleton

@@ -1,8 +1,21 @@
 import os
+import shutil
+import tempfile
 from pathlib import Path
 
 import pytest
 from hypothesis import settings
+
+# The disk cache of analysed library clips and automata (doodle.core.cache) goes to a folder
+# of this test session, never the home folder: set before any test (or CLI subprocess, which
+# inherits it) runs, removed at the end.
+CACHE = tempfile.mkdtemp(prefix="doodle-test-cache-")
+os.environ["DOODLE_CACHE"] = CACHE
+os.environ.pop("DOODLE_NO_CACHE", None)
+
+
+def pytest_unconfigure(config):
+    shutil.rmtree(CACHE, ignore_errors=True)
 
 SHARED = Path(__file__).resolve().parents[1].parent / "shared"
 VIVE = SHARED / "data" / "vive-gestures"

@@ -61,20 +61,44 @@ class Actions:
     directions: dict = None  # travelling cyclic action -> the way its clips must travel (rad from the facing)
 
 
-def load_for_compile(library_dir=None, use_builtin: bool = True) -> Actions:
+def load_for_compile(library_dir=None, use_builtin: bool = True, cache: bool = True) -> Actions:
     """The library and its clips; with a user library, every built-in action it has no
     fitting clip of on its skeleton gets the built-in clip retargeted onto that skeleton
-    (after its own clips, see :func:`choose`)."""
+    (after its own clips, see :func:`choose`). With ``cache`` (and a cache folder:
+    :mod:`doodle.core.cache`), the analysed clips and the automata are read back from the
+    last run on the same files (:mod:`doodle.app.libcache`) — the same values."""
+    from doodle.app import libcache
+
+    library, user = load_combined(library_dir, use_builtin)
+    key = libcache.clips_key(library, user, use_builtin) if cache and libcache.usable() else None
+    stored = libcache.read_clips(key) if key is not None else None
+    if stored is not None:
+        clips, directions, said = stored
+    else:
+        with warnings.catch_warnings(record=True) as said:  # kept with the clips: said again on every run
+            clips, directions = _analysed_clips(library, user, use_builtin)
+        said = [libcache.Note.of(w) for w in said]
+        if key is not None:
+            libcache.write_clips(key, clips, directions, said)
+    for note in said:
+        note.warn()
+    compiled = libcache.compile_library(library) if key is not None else compile_library(library)
+    return Actions(library, user, compiled, clips, directions)
+
+
+def _analysed_clips(library, user, use_builtin: bool) -> tuple[dict, dict]:
+    """Every action's clips read and analysed (:func:`retarget.clips.load_clips`), built-in
+    ones retargeted onto a user library's skeleton where it has none of its own that fits,
+    and the travelling actions' directions."""
     from library.manifest import builtin
     from retarget.clips import load_clips, travel_directions
 
-    library, user = load_combined(library_dir, use_builtin)
     clips = load_clips(library)
     own = load_clips(builtin()) if use_builtin and user is not None else {}
     directions = travel_directions(builtin(), own) if use_builtin else travel_directions(library, clips)
     if own:
         clips = _with_retargeted(library, user, clips, own, directions)
-    return Actions(library, user, compile_library(library), clips, directions)
+    return clips, directions
 
 
 def _with_retargeted(library, user, clips: dict, own: dict, directions: dict) -> dict:
@@ -118,7 +142,7 @@ def compile_doodle(doodle: Doodle, library_dir=None, use_builtin: bool = True, p
                    fps: float = 30.0, scale: float | None = None, threshold: float = 2.0,
                    pin: bool = True, terrain=None, jump_arc: str = "clip", retime: str = "uniform",
                    qualities: dict | None = None, style: str = "modifiers", effort_model=None,
-                   progress=None) -> list[Animation]:
+                   progress=None, cache: bool = True) -> list[Animation]:
     """Every track of a doodle turned into an animation on one timeline.
 
     Stages: the library loaded once (:func:`load_for_compile`); the scene recognised and
@@ -134,8 +158,10 @@ def compile_doodle(doodle: Doodle, library_dir=None, use_builtin: bool = True, p
     Segments without a quality given get the one ``effort_model`` (a
     :class:`laban.models.EffortModel`) recognises in the hand's motion, if one is given.
     ``progress(done, total)`` is called as segments are done (for a progress bar).
+    ``cache``: the library's analysed clips and automata read from (and kept in) the disk
+    cache (:func:`load_for_compile`) — the same results either way.
     """
-    actions = load_for_compile(library_dir, use_builtin)
+    actions = load_for_compile(library_dir, use_builtin, cache)
     scale = CHARACTER_HEIGHT / PROP_SIZE if scale is None else scale
     doodle, recognised = scene(doodle, actions, params, threshold, scale)
     times = np.arange(int(np.floor(float(doodle.t[-1]) * fps)) + 1) / fps

@@ -67,6 +67,20 @@ def rotate(q: np.ndarray, u: np.ndarray) -> np.ndarray:
     return out
 
 
+def front(q: np.ndarray) -> np.ndarray:
+    """The local +z axis (..., 3) of quaternions ``q`` (..., 4), not necessarily unit, in the
+    world: ``scipy.spatial.transform.Rotation.from_quat(q).apply([0, 0, 1])`` to the bit —
+    ``q`` normalised, then the third column of its rotation matrix, in scipy's order of
+    operations (``tests/test_startup.py`` compares them) — without importing scipy. A zero
+    quaternion is a ValueError, as there."""
+    x, y, z, w = q[..., 0], q[..., 1], q[..., 2], q[..., 3]
+    norm = np.sqrt(x * x + y * y + z * z + w * w)
+    if np.any(norm == 0):
+        raise ValueError("Found zero norm quaternions in `quat`.")
+    x, y, z, w = x / norm, y / norm, z / norm, w / norm
+    return np.stack([2 * (x * z + y * w), 2 * (y * z - x * w), -x * x - y * y + z * z + w * w], axis=-1)
+
+
 def rotate_inverse(q: np.ndarray, u: np.ndarray) -> np.ndarray:
     """Express world vectors ``u`` in the local frames ``q`` (``R^T u``)."""
     return rotate(conjugate(q), u)

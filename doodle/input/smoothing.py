@@ -21,8 +21,6 @@ from __future__ import annotations
 from collections import deque
 
 import numpy as np
-from scipy.signal import savgol_coeffs
-
 
 ITERATED = 2000  # Laplacian iterations computed one by one; beyond, the kernel in closed form
 
@@ -42,6 +40,28 @@ def laplacian_kernel(sigma_s: float, rate: float, lam: float = 0.5) -> np.ndarra
     for _ in range(k):
         kernel = np.convolve(kernel, step)
     return kernel
+
+
+def savgol_coeffs(window_length: int, polyorder: int) -> np.ndarray:
+    """Savitzky–Golay smoothing coefficients: ``scipy.signal.savgol_coeffs(window_length,
+    polyorder)`` (value at the window's centre, convolution order), written out.
+
+    The least-squares fit of a polynomial of degree ``polyorder`` to ``window_length``
+    samples at offsets ``-h … h`` from the centre, evaluated at 0: the coefficients ``c``
+    solve ``A c = e_0`` in the least-squares sense, where ``A[k, i] = x_i ** k`` — scipy's
+    own formulation and LAPACK driver (``gelsd``), so the two agree to rounding
+    (``tests/test_signal.py`` checks 1e-12) without importing ``scipy.signal`` (half a
+    second at start-up).
+    """
+    if not 0 <= polyorder < window_length:
+        raise ValueError("polyorder must be less than window_length.")
+    halflen, rem = divmod(window_length, 2)
+    pos = halflen if rem else halflen - 0.5
+    x = np.arange(-pos, window_length - pos, dtype=float)[::-1]  # reversed: for a convolution
+    A = x ** np.arange(polyorder + 1, dtype=float).reshape(-1, 1)
+    y = np.zeros(polyorder + 1)
+    y[0] = 1.0
+    return np.linalg.lstsq(A, y, rcond=np.finfo(float).eps * max(A.shape))[0]
 
 
 def savgol_kernel(window_s: float, rate: float, order: int = 3) -> np.ndarray:

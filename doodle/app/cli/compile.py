@@ -41,6 +41,9 @@ def add_parser(sub) -> None:
                         "(gesture retiming + motion scale + reshaping)")
     p.add_argument("--retime", choices=["uniform", "gesture"], default="uniform",
                    help="one-shot clips at an even pace (default) or following the hand's own timing (5.3.3)")
+    p.add_argument("--no-cache", action="store_true",
+                   help="analyse the library's clips and compile its automata afresh, without reading or writing "
+                        "the cache (~/.cache/doodle, $DOODLE_CACHE; DOODLE_NO_CACHE=1 turns it off everywhere)")
     segmenter_options(p)
     g = p.add_argument_group("several files (on Dask)")
     g.add_argument("--workers", type=int, metavar="N",
@@ -103,7 +106,7 @@ def compile_scene(file, output, args, progress=None) -> tuple[dict, dict]:
         effort_model = load_effort_model(args.effort_model)
     results = compile_doodle(doodle, args.library, not args.no_builtin, params, args.fps, args.scale, args.threshold,
                              not args.no_foot_pinning, terrain, args.jump_arc, args.retime, qualities, args.style,
-                             effort_model, progress)
+                             effort_model, progress, cache=not args.no_cache)
     if args.edits:
         check_edits(args.edits, qualities, {r.track: len(r.segments) for r in results})
     paths = {r.track: out / f"{r.track}.bvh" for r in results}

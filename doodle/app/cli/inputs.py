@@ -8,7 +8,6 @@ import json
 from doodle.core.errors import DoodleError
 from doodle.core.files import output_file
 from doodle.app.cli.options import each_file, input_options, load_input, segmenter_options, segmenter_params
-from doodle.app.report import seconds_of
 
 
 def add_tokens_parser(sub) -> None:
@@ -47,6 +46,7 @@ def add_parser(sub) -> None:
 
 
 def cmd_tokens(args) -> int:
+    from doodle.app.report import seconds_of
     from doodle.input.segmenter import tokenize_doodle
 
     params, mounts = segmenter_params(args)

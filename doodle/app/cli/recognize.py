@@ -5,8 +5,6 @@ from __future__ import annotations
 import json
 
 from doodle.app.cli.options import each_file, input_options, library_options, segmenter_options, segmenter_params
-from doodle.app.report import recognized, seconds_of
-from grammar.contexter import InteractionSegment, Refused
 
 
 def add_parser(sub) -> None:
@@ -23,7 +21,10 @@ def add_parser(sub) -> None:
 
 
 def cmd_recognize(args) -> int:
-    from grammar.recognizer import load_actions, recognize
+    from doodle.app.report import recognized, seconds_of
+    from grammar.contexter import Refused
+    from doodle.app.libcache import compiled_actions as load_actions
+    from grammar.recognizer import recognize
 
     params, mounts = segmenter_params(args)
     compiled = load_actions(args.library, not args.no_builtin)
@@ -51,6 +52,8 @@ def cmd_recognize(args) -> int:
 
 def _named(segment) -> str:
     """An action, with the interaction it plays a role in (or why it was refused)."""
+    from grammar.contexter import InteractionSegment, Refused
+
     if isinstance(segment, Refused):
         return f"unknown (refused {segment.refused}: {segment.reason})"
     if isinstance(segment, InteractionSegment):

@@ -7,9 +7,8 @@ synthetic`` plays a built-in synthetic performance (the thesis's Fig. 4.7 scene,
 
 from __future__ import annotations
 
+import math
 import sys
-
-import numpy as np
 
 from doodle.core.errors import DoodleError
 
@@ -86,12 +85,12 @@ class _View:
 
 
 def cmd_record(args) -> int:
-    from grammar.recognizer import load_actions
+    from doodle.app.libcache import compiled_actions as load_actions
     from doodle.app.recorder import record
     from doodle.core.files import output_dir, output_file
 
     out = output_file(args.output, args.overwrite)
-    if args.seconds is not None and not (args.seconds > 0 and np.isfinite(args.seconds)):
+    if args.seconds is not None and not (args.seconds > 0 and math.isfinite(args.seconds)):
         raise DoodleError(f"--seconds must be a positive number, not {args.seconds:g}")
     source = _open_source(args)
     try:

@@ -25,7 +25,7 @@ def cmd_replay(args) -> int:
     import numpy as np
 
     from doodle.app.cli.options import load_input, segmenter_params
-    from grammar.recognizer import load_actions
+    from doodle.app.libcache import compiled_actions as load_actions
     from doodle.app.replay import replay
 
     if not (args.speed >= 0 and np.isfinite(args.speed)):

@@ -1,0 +1,295 @@
+"""The library work a compile repeats on every run, kept on disk between runs
+(:mod:`doodle.core.cache`): each action's compiled automaton (DFA), the Matcher's tables,
+and the library's clips read, put on the floor, turned to face front and analysed (roles,
+stages, cycle length, foot contacts, travel direction).
+
+Three kinds of entry, each named by a hash of what it is derived from, the code that derives
+it (:func:`code_version`: the source of ``doodle.core``, ``grammar``, ``retarget``,
+``library``, the pipeline and this module; numpy's version, and scipy's for the clips) and
+:data:`FORMAT`:
+
+* ``dfas`` — the minimal DFA of each expression, keyed by the expressions;
+* ``automaton`` — the Matcher's tables (:class:`grammar.matcher.Automaton`) for one
+  threshold and set of tracks, keyed by the recognisable actions' definitions;
+* ``clips`` — every clip of the library as :func:`doodle.app.pipeline.load_for_compile`
+  makes it (a user library's own and the built-in ones retarget onto its skeleton), and the
+  travelling actions' directions, keyed by the combined library's definitions, the user's
+  and the built-in one's, and the **contents** of every file they name (clips, shapes,
+  two-character clips).
+
+So an edited clip, manifest or module is a different key and the entry is rebuilt; an
+entry that cannot be read back exactly as it was written (truncated, corrupt, another
+format) is ignored and rebuilt. Results are the same with the cache cold or warm — every
+array is stored as float64/int64/bool and read back bit for bit, every number in the JSON
+header written with ``repr`` (exact) — which ``tests/test_startup.py`` checks on the
+compiled output.
+"""
+
+from __future__ import annotations
+
+import importlib
+import json
+import sys
+import warnings
+from dataclasses import asdict, dataclass, replace
+from pathlib import Path
+
+import numpy as np
+
+from doodle.core import cache
+
+FORMAT = 1
+_ROOT = Path(__file__).resolve().parents[2]
+_CODE = ("doodle/core", "grammar", "retarget", "library", "doodle/app/libcache.py", "doodle/app/pipeline.py")
+_VERSION: list[str] = []
+
+
+def code_version() -> str | None:
+    """A hash of the code whose results are cached (its source files' contents), numpy's
+    version and :data:`FORMAT` (the clips' key adds scipy's); None when the sources cannot
+    be read (an unusual installation: then nothing is cached)."""
+    if not _VERSION:
+        try:
+            files = []
+            for part in _CODE:
+                path = _ROOT / part
+                files += sorted(path.rglob("*.py")) if path.is_dir() else [path]
+            parts = [FORMAT, sys.version_info[:2], np.__version__]
+            for f in files:
+                parts += [f.relative_to(_ROOT).as_posix(), f.read_bytes()]
+            _VERSION.append(cache.digest(*parts))
+        except OSError:
+            _VERSION.append(None)
+    return _VERSION[0]
+
+
+def usable() -> bool:
+    """Whether the cache is on (a folder, :mod:`doodle.core.cache`) and the code's version known."""
+    return cache.folder() is not None and code_version() is not None
+
+
+def _header(arrays: dict, kind: str, key: str) -> dict:
+    """The JSON header of an entry, checked to be the one asked for (else ValueError)."""
+    meta = json.loads(str(arrays["meta"][()]))
+    if meta.get("format") != FORMAT or meta.get("kind") != kind or meta.get("key") != key:
+        raise ValueError("another entry")
+    return meta
+
+
+def _meta(kind: str, key: str, **fields) -> np.ndarray:
+    return np.array(json.dumps({"format": FORMAT, "kind": kind, "key": key, **fields}))
+
+
+# --- automata ---------------------------------------------------------------------------------
+
+def _expressions(library) -> list[str]:
+    return sorted({a.expression for a in library.actions if a.expression.strip()})
+
+
+def read_dfas(library) -> tuple[str, dict]:
+    """``(key, {expression: DFA})``: the library's automata found in the cache (empty when
+    none are)."""
+    from doodle.core.tokens import N_CODES
+    from grammar.automata import DFA
+
+    expressions = _expressions(library)
+    key = cache.digest("dfas", code_version(), *expressions)
+    arrays = cache.read("dfas", key)
+    if arrays is None:
+        return key, {}
+    try:
+        meta = _header(arrays, "dfas", key)
+        if meta["expressions"] != expressions:
+            raise ValueError("other expressions")
+        known = {}
+        for i, text in enumerate(expressions):
+            table, accept = arrays[f"dfa{i}_table"], arrays[f"dfa{i}_accept"]
+            if (table.dtype != np.int64 or table.ndim != 2 or table.shape[1] != N_CODES or accept.dtype != bool
+                    or accept.shape != (len(table),) or len(table) == 0 or table.min() < -1
+                    or table.max() >= len(table)):
+                raise ValueError("not a DFA")
+            known[text] = DFA(table, accept)
+        return key, known
+    except (KeyError, ValueError, TypeError, AttributeError):
+        return key, {}
+
+
+def write_dfas(key: str, compiled) -> None:
+    """Store the DFAs of ``compiled`` (and of its interaction roles) under ``key``."""
+    by_text = {}
+    for part in (compiled, compiled.roles):
+        if part is not None:
+            by_text.update({a.expression: d for a, d in zip(part.library.actions, part.dfas)})
+    expressions = sorted(by_text)
+    arrays = {"meta": _meta("dfas", key, expressions=expressions)}
+    for i, text in enumerate(expressions):
+        arrays[f"dfa{i}_table"] = np.asarray(by_text[text].table, dtype=np.int64)
+        arrays[f"dfa{i}_accept"] = np.asarray(by_text[text].accept, dtype=bool)
+    cache.write("dfas", key, arrays)
+
+
+class AutomatonStore:
+    """The Matcher's tables of a compiled library kept in the cache
+    (:attr:`grammar.library.Compiled.store`)."""
+
+    def get(self, compiled, key: tuple, build):
+        name = cache.digest("automaton", code_version(), repr(compiled.library.actions), repr(key))
+        arrays = cache.read("automaton", name)
+        if arrays is not None:
+            try:
+                _header(arrays, "automaton", name)
+                return compiled.automaton_from(key, arrays)
+            except (KeyError, ValueError, TypeError, AttributeError, IndexError):
+                pass
+        automaton = build()
+        if automaton is not None:
+            cache.write("automaton", name, {"meta": _meta("automaton", name), **automaton.tables()})
+        return automaton
+
+
+def compile_library(library):
+    """:func:`grammar.library.compile_library` with the automata kept in the cache: the
+    DFAs read back (compiled and stored when missing) and the Matcher's tables stored as
+    they are first built. Without a cache folder (``DOODLE_NO_CACHE``), just compiled."""
+    from grammar.library import compile_library as compile_
+
+    if not usable():
+        return compile_(library)
+    key, known = read_dfas(library)
+    compiled = compile_(library, known)
+    if not known:
+        write_dfas(key, compiled)
+    return replace(compiled, store=AutomatonStore())
+
+
+def compiled_actions(library_dir=None, use_builtin: bool = True):
+    """The built-in library, extended or overridden by the one in ``library_dir``, compiled
+    (:func:`grammar.recognizer.load_actions`, through the cache)."""
+    from library.manifest import load_combined
+
+    return compile_library(load_combined(library_dir, use_builtin)[0])
+
+
+# --- clips ------------------------------------------------------------------------------------
+
+def clips_key(library, user, use_builtin: bool) -> str | None:
+    """The key of a library's analysed clips: its definitions, the user library's and the
+    built-in one's, and the contents of every file they name; None when a file cannot be
+    read (the compile then reports it)."""
+    import scipy  # the analysis runs on it (retarget.analysis, retarget.clips); imported by them anyway
+
+    from library.manifest import builtin
+
+    parts = ["clips", code_version(), scipy.__version__, repr(library), repr(user), use_builtin]
+    libraries = [library] + ([user] if user is not None else [])
+    if use_builtin and user is not None:
+        base = builtin()
+        parts.append(repr(base))
+        libraries.append(base)
+    names = set()
+    for lib in libraries:
+        for a in lib.actions:
+            names.update(a.clips)
+            if a.shape:
+                names.add(a.shape)
+        for i in lib.interactions:
+            names.update(i.pair)
+    try:
+        for name in sorted(names):
+            parts += [name, Path(name).read_bytes()]
+    except OSError:
+        return None
+    return cache.digest(*parts)
+
+
+def _clip_meta(clip) -> dict:
+    sk = clip.motion.skeleton
+    st = clip.stages
+    return {"action": clip.action, "path": clip.path, "roles": {r: int(j) for r, j in clip.roles.items()},
+            "stages": [int(v) for v in (st.preparation, st.anticipation, st.execution, st.follow_through,
+                                        st.transition)],
+            "cycle_length": None if clip.cycle_length is None else float(clip.cycle_length),
+            "travel": None if clip.travel is None else float(clip.travel), "retargeted": bool(clip.retargeted),
+            "frame_time": float(clip.motion.frame_time), "names": list(sk.names),
+            "channels": [list(c) for c in sk.channels], "end_sites": [int(j) for j in sk.end_sites]}
+
+
+@dataclass(frozen=True)
+class Note:
+    """A warning given while the clips were analysed, kept with them so that a run reading
+    them from the cache says it too (as it was shown: message, category, where)."""
+
+    message: str
+    category: str  # module:qualified name
+    filename: str
+    lineno: int
+
+    @classmethod
+    def of(cls, w: warnings.WarningMessage) -> "Note":
+        c = w.category
+        return cls(str(w.message), f"{c.__module__}:{c.__qualname__}", str(w.filename), int(w.lineno))
+
+    def warn(self) -> None:
+        module, _, name = self.category.partition(":")
+        try:
+            category = getattr(importlib.import_module(module), name)
+            if not (isinstance(category, type) and issubclass(category, Warning)):
+                raise TypeError
+        except (ImportError, AttributeError, TypeError, ValueError):
+            category = UserWarning
+        warnings.warn_explicit(self.message, category, self.filename, self.lineno)
+
+
+def write_clips(key: str, clips: dict, directions: dict, said: list = ()) -> None:
+    """Store a library's analysed clips (``{action: [Clip]}``), travel directions and the
+    warnings given while analysing them (:class:`Note`)."""
+    arrays, listed, k = {}, {}, 0
+    for action, found in clips.items():
+        listed[action] = []
+        for clip in found:
+            sk, m = clip.motion.skeleton, clip.motion
+            listed[action].append(_clip_meta(clip))
+            arrays[f"c{k}_parents"] = np.asarray(sk.parents, dtype=np.int64)
+            arrays[f"c{k}_offsets"] = np.asarray(sk.offsets, dtype=float)
+            arrays[f"c{k}_end_sites"] = np.array([sk.end_sites[j] for j in sk.end_sites], dtype=float).reshape(-1, 3)
+            arrays[f"c{k}_translations"] = np.asarray(m.translations, dtype=float)
+            arrays[f"c{k}_rotations"] = np.asarray(m.rotations, dtype=float)
+            arrays[f"c{k}_contacts"] = np.asarray(clip.contacts, dtype=bool)
+            k += 1
+    arrays["meta"] = _meta("clips", key, clips=listed, directions={a: float(v) for a, v in directions.items()},
+                           said=[asdict(n) for n in said])
+    cache.write("clips", key, arrays)
+
+
+def read_clips(key: str) -> tuple[dict, dict, list] | None:
+    """``(clips, directions, warnings)`` as :func:`write_clips` stored them, or None."""
+    from retarget.analysis import Stages
+    from retarget.clips import Clip
+    from retarget.skeleton import Motion, Skeleton
+
+    arrays = cache.read("clips", key)
+    if arrays is None:
+        return None
+    try:
+        meta = _header(arrays, "clips", key)
+        clips, k = {}, 0
+        for action, listed in meta["clips"].items():
+            clips[action] = []
+            for c in listed:
+                ends = arrays[f"c{k}_end_sites"]
+                if ends.shape != (len(c["end_sites"]), 3):
+                    raise ValueError("end sites")
+                sk = Skeleton(tuple(c["names"]), arrays[f"c{k}_parents"], arrays[f"c{k}_offsets"],
+                              tuple(tuple(ch) for ch in c["channels"]), dict(zip(c["end_sites"], ends)))
+                motion = Motion(sk, arrays[f"c{k}_translations"], arrays[f"c{k}_rotations"], c["frame_time"])
+                contacts = arrays[f"c{k}_contacts"]
+                if contacts.shape != (motion.frames, 2) or contacts.dtype != bool:
+                    raise ValueError("contacts")
+                clips[action].append(Clip(c["action"], c["path"], motion, dict(c["roles"]), Stages(*c["stages"]),
+                                          c["cycle_length"], contacts, c["travel"], c["retargeted"]))
+                k += 1
+        said = [Note(str(n["message"]), str(n["category"]), str(n["filename"]), int(n["lineno"]))
+                for n in meta["said"]]
+        return clips, dict(meta["directions"]), said
+    except (KeyError, ValueError, TypeError, AttributeError, IndexError):
+        return None
