@@ -13,7 +13,6 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import numpy as np
 
 from doodle.core.files import atomic_path
 from retarget.sheet import contact_sheet

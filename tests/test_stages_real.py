@@ -4,7 +4,6 @@ on the held-out ones; a clip of several punches splits into its repetitions."""
 
 from pathlib import Path
 
-import numpy as np
 import pytest
 
 from bench.stages_accuracy import labels, real_errors, split_errors
