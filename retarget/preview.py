@@ -13,7 +13,6 @@ from __future__ import annotations
 
 from pathlib import Path
 
-
 from doodle.core.files import atomic_path
 from retarget.sheet import contact_sheet
 from retarget.skeleton import forward_kinematics
