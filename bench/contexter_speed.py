@@ -1,12 +1,13 @@
 """Contexter cost: interactions recognised across 2 and 4 tracks, per frame of
 the doodle, beside the per-track recognition it runs after (Segmenter + Matcher, batch); and
-streamed as `doodle replay` runs it (the live Contexter), per frame, beside replay without it."""
+streamed as `doodle replay` runs it (the live Contexter), CPU time per frame, beside replay
+without it (and the wall-clock p99, which a shared machine inflates)."""
 
 import time
 
 import numpy as np
 
-from bench.timing import best_of
+from bench.timing import best_of, cpu_per_frame
 from grammar.recognizer import load_actions, recognize, track_automata
 from doodle.app.replay import replay
 from doodle.synth.strokes import stroke, synth_doodle
@@ -50,11 +51,13 @@ def main() -> None:
               f"Contexter {best / frames * 1e6:.1f} µs per frame   (baseline, per-track recognition "
               f"{base / frames * 1e6:.1f} µs per frame)")
         automata = track_automata(compiled, doodle.names)
-        alone = replay(doodle, without, automata=automata).costs
-        live = replay(doodle, compiled, automata=automata).costs
-        print(f"    streamed (doodle replay, live Contexter): per frame p50 {np.percentile(live, 50) * 1e3:.3f} ms, "
+        alone = cpu_per_frame(doodle, without, automata=automata)
+        live = cpu_per_frame(doodle, compiled, automata=automata)
+        wall = replay(doodle, compiled, automata=automata).costs
+        print(f"    streamed (doodle replay, live Contexter), CPU per frame: p50 {np.percentile(live, 50) * 1e3:.3f} ms, "
               f"p99 {np.percentile(live, 99) * 1e3:.2f} ms, max {live.max() * 1e3:.2f} ms   (without it: p99 "
-              f"{np.percentile(alone, 99) * 1e3:.2f} ms; target p99 ≤ 1 ms)")
+              f"{np.percentile(alone, 99) * 1e3:.2f} ms; target p99 ≤ 1 ms); wall-clock p99 "
+              f"{np.percentile(wall, 99) * 1e3:.2f} ms")
 
 
 if __name__ == "__main__":

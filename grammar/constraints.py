@@ -64,27 +64,45 @@ def zone_distance(zone: str, r_i: float, r_j: float) -> float:
 
 
 def distance(p_i, p_j) -> float:
-    return float(np.linalg.norm(np.asarray(p_j, float) - np.asarray(p_i, float)))
+    return float(np.linalg.norm(np.asarray(p_j, float) - np.asarray(p_i, float), axis=-1))
 
 
 def within(p_i, p_j, threshold: float) -> bool:
     """``D(i, j, α)``: ``‖P_i − P_j‖ ≤ α``."""
-    return distance(p_i, p_j) <= threshold
+    return bool(within_all(_rows(p_i), _rows(p_j), threshold)[0])
 
 
 def sees(p_i, f_i, p_j, gamma: float) -> bool:
     """``V(i, j, γ)``: ``dot(unit(P_j − P_i), F_i) ≥ γ``, on the ground plane."""
-    d = np.asarray(p_j, float) - np.asarray(p_i, float)
-    d[1] = 0.0
-    n = np.linalg.norm(d)
-    if n < 1e-9:  # same place: nothing to look towards
-        return False
-    return float(d @ np.asarray(f_i, float)) / n >= gamma
+    return bool(sees_all(_rows(p_i), _rows(f_i), _rows(p_j), gamma)[0])
 
 
 def mutual_view(f_i, f_j, beta: float) -> bool:
     """``MV(i, j, β)``: ``dot(F_i, F_j) ≤ β``."""
-    return float(np.asarray(f_i, float) @ np.asarray(f_j, float)) <= beta
+    return bool(mutual_view_all(_rows(f_i), _rows(f_j), beta)[0])
+
+
+def within_all(p_i: np.ndarray, p_j: np.ndarray, threshold: float) -> np.ndarray:
+    """:func:`within` at every time of (n, 3) positions."""
+    return np.linalg.norm(p_j - p_i, axis=-1) <= threshold
+
+
+def sees_all(p_i: np.ndarray, f_i: np.ndarray, p_j: np.ndarray, gamma: float) -> np.ndarray:
+    """:func:`sees` at every time of (n, 3) positions and fronts (at one place: nothing to
+    look towards, so not seen)."""
+    d = p_j - p_i
+    d[:, 1] = 0.0
+    n = np.linalg.norm(d, axis=-1)
+    return (n >= 1e-9) & ((d * f_i).sum(axis=-1) / np.maximum(n, 1e-9) >= gamma)
+
+
+def mutual_view_all(f_i: np.ndarray, f_j: np.ndarray, beta: float) -> np.ndarray:
+    """:func:`mutual_view` at every time of (n, 3) fronts."""
+    return (f_i * f_j).sum(axis=-1) <= beta
+
+
+def _rows(x) -> np.ndarray:
+    return np.asarray(x, dtype=float).reshape(1, 3)
 
 
 @dataclass(frozen=True)
@@ -97,13 +115,17 @@ class Constraint:
     value: str | float
 
     def holds(self, state_i: State, state_j: State) -> bool:
+        return bool(self.holds_all(_rows(state_i.position), _rows(state_i.front), state_i.radius,
+                                   _rows(state_j.position), _rows(state_j.front), state_j.radius)[0])
+
+    def holds_all(self, p_i, f_i, r_i: float, p_j, f_j, r_j: float) -> np.ndarray:
+        """Whether it holds at every time of roles i and j's (n, 3) positions and fronts."""
         if self.kind == "D":
-            alpha = (zone_distance(self.value, state_i.radius, state_j.radius) if isinstance(self.value, str)
-                     else self.value)
-            return within(state_i.position, state_j.position, alpha)
+            alpha = zone_distance(self.value, r_i, r_j) if isinstance(self.value, str) else self.value
+            return within_all(p_i, p_j, alpha)
         if self.kind == "V":
-            return sees(state_i.position, state_i.front, state_j.position, self.value)
-        return mutual_view(state_i.front, state_j.front, self.value)
+            return sees_all(p_i, f_i, p_j, self.value)
+        return mutual_view_all(f_i, f_j, self.value)
 
     def __str__(self) -> str:
         v = self.value.capitalize() if isinstance(self.value, str) else f"{self.value:g}"

@@ -29,7 +29,11 @@ of their own (:func:`with_interactions`) and, when the interaction holds, replac
 independent segments they cover.
 
 Streaming: :class:`LiveContexter` pools each track's final segments as they come and reports
-an interaction once every track has decided past its end (what ``doodle replay`` shows).
+an interaction once every track has decided past its end (what ``doodle replay`` shows). It
+asks its Contexter again at every new segment; whether a candidate's constraints hold over
+its overlap is worked out once (the overlap's samples are in the past) and all its samples
+at once, with the characters' fronts worked out once per sample, so each new segment only
+costs its new candidates.
 
 Behaviour states (§6.3.3): :func:`apply_behaviour` walks each character's segments in time
 order from the library's initial state; a segment whose action's pre-conditions do not hold
@@ -44,7 +48,7 @@ from itertools import permutations, product
 
 import numpy as np
 
-from grammar.constraints import RADIUS, Behaviour, Constraint, State, all_hold, ground_front, parse_constraints
+from grammar.constraints import RADIUS, Behaviour, Constraint, ground_front, parse_constraints
 from grammar.matcher import Segment
 
 MODES = ("any", "all")
@@ -87,13 +91,20 @@ class Contexter:
         self.rules = [Rule(i.name, tuple(i.actions), parse_constraints(i.constraints, i.name, len(i.actions)))
                       for i in interactions]
         self.radius, self.mode = radius, mode
+        self._doodle = None  # the doodle read so far, and of it:
+        self._held: dict = {}  # (rule, tracks, overlap) -> whether the constraints hold there
+        self._front: dict = {}  # track -> its fronts so far
 
     def _radius(self, track: str) -> float:
         return float(self.radius.get(track, RADIUS)) if isinstance(self.radius, dict) else float(self.radius)
 
     def candidates(self, doodle, segments: dict[str, list[Segment]]) -> list[Found]:
         """Every (interaction, assignment, segment tuple) whose segments overlap and whose
-        constraints hold, in priority order."""
+        constraints hold, in priority order. Whether the constraints hold over an overlap is
+        worked out once per Contexter (the live one asks again as segments come: the
+        samples of an overlap, all in the past, do not change)."""
+        if doodle is not self._doodle:  # what is remembered is of one doodle
+            self._doodle, self._held, self._front = doodle, {}, {}
         tracks = {tr.name: tr for tr in doodle.tracks}
         names = [n for n in segments if n in tracks]
         spans = {n: [(_time(tracks[n], s.start), _time(tracks[n], s.end)) for s in segments[n]] for n in names}
@@ -108,7 +119,10 @@ class Contexter:
                     t1 = min(spans[tr][x][1] for tr, x in zip(assigned, picked))
                     if not t0 < t1:
                         continue
-                    if self._constraints_hold(rule, [tracks[tr] for tr in assigned], t0, t1):
+                    key = (order, assigned, t0, t1)  # what the constraints read: the samples of the overlap
+                    if key not in self._held:
+                        self._held[key] = self._constraints_hold(rule, [tracks[tr] for tr in assigned], t0, t1)
+                    if self._held[key]:
                         length = sum(segments[tr][x].stop - segments[tr][x].first for tr, x in zip(assigned, picked))
                         found.append(((t0, -length, order), Found(rule.name, assigned, tuple(picked), t0, t1)))
         found.sort(key=lambda item: item[0])  # stable: assignment order breaks the last ties
@@ -127,18 +141,24 @@ class Contexter:
             idx = _nearest(tr.t, times)
             p, q = tr.p[idx], tr.q[idx]
             ok &= tr.valid[idx] & np.isfinite(p).all(axis=1) & np.isfinite(q).all(axis=1)
-            poses.append((p, np.where(np.isfinite(q), q, [0.0, 0.0, 0.0, 1.0]), self._radius(tr.name)))
-        fronts = [ground_front(q) for _, q, _ in poses]
-        results = []
-        for s in np.flatnonzero(ok):
-            states = [State(p[s], f[s], r) for (p, _, r), f in zip(poses, fronts)]
-            holds = all_hold(rule.constraints, states)
-            if self.mode == "any" and holds:
-                return True
-            if self.mode == "all" and not holds:
-                return False
-            results.append(holds)
-        return bool(results) and self.mode == "all"
+            poses.append((p, self._fronts(tr, int(idx.max()))[idx], self._radius(tr.name)))
+        holds = ok.copy()  # every constraint at once, at every valid sample
+        for c in rule.constraints:
+            (p_i, f_i, r_i), (p_j, f_j, r_j) = poses[c.i], poses[c.j]
+            holds &= c.holds_all(p_i, f_i, r_i, p_j, f_j, r_j)
+        if self.mode == "any":
+            return bool(holds.any())
+        return bool(ok.any()) and bool((holds == ok).all())
+
+    def _fronts(self, track, last: int) -> np.ndarray:
+        """The track's ground-plane fronts (:func:`ground_front`) up to sample ``last`` at
+        least, worked out once per sample (a sample's pose does not change)."""
+        known = self._front.get(track.name, np.empty((0, 3)))
+        if len(known) <= last:
+            q = track.q[len(known):]
+            known = np.concatenate([known, ground_front(np.where(np.isfinite(q), q, [0.0, 0.0, 0.0, 1.0]))])
+            self._front[track.name] = known
+        return known
 
     def resolve(self, doodle, segments: dict[str, list[Segment]]) -> dict[str, list[Segment]]:
         """Per track, its segments with those of recognised interactions relabelled."""

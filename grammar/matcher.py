@@ -41,10 +41,15 @@ is one Walk at distance 1, Algorithm 1's cyclic rule) — and an exact segmentat
 approximate one unless it needs more segments than the edits it saves.
 
 Streaming. Every token position that may start a segment keeps a row of edit costs (one
-per state of every action); a row dies when no action is within the threshold, so only a
-short window is alive. A segment is returned as soon as every segmentation that can still
-be extended agrees on it — typically one or two tokens after it ends. ``match`` (batch) is
-the same code run to the end of the stream.
+per state of every action); a row dies once it can give no segment any more — no action
+within its limit that could still be more than half matched, however the tokens go on
+(:mod:`grammar.blocks`) — so only a short window is alive. A segment is returned as soon as
+every segmentation that can still be extended agrees on it — typically at the token that
+ends it, or the next. Rows are interned (:mod:`grammar.rows`): a token costs a list look-up
+per live row, the arithmetic of :meth:`Automaton.step` being done once per new row and
+token, with bit sets. ``match`` (batch) is the same code run to the end of the stream.
+:meth:`Matcher.fork` copies a Matcher, to ask what tokens that may yet change would decide
+(provisional actions, :class:`grammar.recognizer.Live`).
 
 Substitution costs are 1 (Levenshtein) or, with ``direction_costs=True``, depend on how far
 apart two directions are: ``0.5 + 0.5·angle/π`` between tokens of the same kind, 1 otherwise
@@ -53,12 +58,14 @@ apart two directions are: ``0.5 + 0.5·angle/π`` between tokens of the same kin
 
 from __future__ import annotations
 
+import copy
 from dataclasses import dataclass
 
 import numpy as np
 
 from doodle.core.tokens import CODES, N_CODES, Token, signs_of
 from grammar.automata import DFA
+from grammar.rows import NONE, RowTable
 
 UNKNOWN = "unknown"
 INF = 1e9
@@ -162,7 +169,7 @@ class Automaton:
         # Per token x, one step = read x (match, substitute along an edge, or delete in
         # place) then insert up to `threshold` tokens (follow edges without reading): the
         # two composed once here, per action block, as min-plus products.
-        blocks, initial = [], []
+        blocks, initial, self.reads = [], [], []
         for off, d, limit in zip(offsets, dfas, self.limits):
             q = d.size
             reach = _insertion_closure(d, self.cap)  # (q, q) fewest insertions from p to r
@@ -181,6 +188,7 @@ class Automaton:
             both = np.stack([np.minimum.reduceat(read[x, src, dst][:, None] + reach[dst], groups, axis=0)
                              for x in range(N_CODES)])  # (x, p, r); every p has its diagonal entry
             blocks.append((off, both, limit))
+            self.reads.append(np.where(both <= limit, both, INF))  # per token, the block's step (grammar.rows)
             initial.append(np.minimum(reach[0], self.cap))
         self.initial = np.concatenate(initial)
         self.step_src, self.step_off, self.step_cost = [], [], []
@@ -198,6 +206,7 @@ class Automaton:
             self.step_off.append(np.searchsorted(dst[order], states))
             self.step_cost.append(cost[order])
         self.sizes_counted = np.array([_string_counts(d, MAX_COUNTED).sum() for d in dfas])  # specificity
+        self.rows = RowTable(self)  # the rows met so far, each stepped once per token (grammar.rows)
 
     def tables(self) -> dict[str, np.ndarray]:
         """The computed tables as plain arrays (the per-token ones concatenated, with their
@@ -242,8 +251,8 @@ class Matcher:
     """Streaming Matcher for one track: ``push`` a token, get the segments that became final.
 
     Every token position that is the start of a possible segment keeps a row of edit costs
-    (one per state of every action); rows die when no action is within the threshold. The
-    best segmentation of the tokens up to each position is kept with a back pointer; a
+    (one per state of every action, interned: an id in ``automaton.rows``); rows die once
+    they can give no segment any more. The best segmentation of the tokens up to each position is kept with a back pointer; a
     segment is final — and returned — once every segmentation that can still be extended
     agrees on it.
     """
@@ -253,50 +262,71 @@ class Matcher:
         self.auto, self.track = automaton, track
         self.edit_weight, self.unknown_cost = edit_weight, unknown_cost
         self._tokens: dict[int, Token] = {}
-        self._rows = np.empty((0, automaton.n))
-        self._starts = np.empty(0, dtype=np.int64)
+        self._ids: list[int] = []  # the live rows (ids in automaton.rows), oldest first
+        self._starts: list[int] = []  # the position each live row started at
         self._best = {0: (0.0, 0.0)}  # position -> (cost, total distance) of the best segmentation
         self._back: dict[int, tuple] = {}  # position -> (start, action or None, distance)
         self._n = 0
         self._done = 0  # segments before this position were returned
         self._unknown: Segment | None = None
 
+    @property
+    def done(self) -> int:
+        """The token position up to which segments have been returned."""
+        return self._done
+
+    @property
+    def unknown(self) -> Segment | None:
+        """The unknown run held back until what follows it is decided (it may grow)."""
+        return self._unknown
+
+    def fork(self) -> "Matcher":
+        """An independent copy: what it is pushed leaves this Matcher as it is (the row
+        table is shared; it only grows)."""
+        other = copy.copy(self)
+        other._tokens, other._best, other._back = dict(self._tokens), dict(self._best), dict(self._back)
+        other._ids, other._starts = list(self._ids), list(self._starts)
+        return other
+
     def push(self, token: Token) -> list[Segment]:
-        e, auto = self._n, self.auto
+        e = self._n
         self._tokens[e] = token
-        self._n += 1
-        rows = auto.step(np.vstack([self._rows, auto.initial]), CODES[token.name])
-        starts = np.append(self._starts, e)
-        alive = rows.min(axis=1) <= auto.threshold
-        self._rows, self._starts = rows[alive], starts[alive]
+        self._n = e + 1
+        code = CODES[token.name]
+        table = self.auto.rows
+        moves, low, pick, shortest = table.next, table.low, table.pick, table.shortest
         cost, dist = self._best[e]
         best, back = (cost + self.unknown_cost, dist), (e, None, None)
-        accept = auto.accept_costs(rows)
-        lengths = e + 1 - starts
-        ok = (accept == 0.0) | ((accept <= auto.limits) & (accept < lengths[:, None] / 2))
-        low = np.where(ok, accept, INF).min(axis=1)
-        for k in np.flatnonzero(ok.any(axis=1)).tolist():
-            s, d_k = int(starts[k]), float(low[k])
-            c, d = self._best[s]
-            option = (c + 1.0 + self.edit_weight * d_k, d + d_k)
-            if option < best:
-                action = auto.most_specific(np.flatnonzero(ok[k] & (accept[k] == d_k)))
-                best, back = option, (s, action, d_k)
+        ids, starts = [], []
+        for s, i in zip(self._starts + [e], self._ids + [table.start]):
+            j = moves[i][code]
+            if j == NONE:
+                j = table.move(i, code)
+            length = e + 1 - s
+            d_k = low[j]
+            if d_k == 0.0 or 2.0 * d_k < length:  # a segment: more than half its tokens match
+                c, d = self._best[s]
+                option = (c + 1.0 + self.edit_weight * d_k, d + d_k)
+                if option < best:
+                    best, back = option, (s, pick[j], d_k)
+            if length > shortest[j]:  # it may give a segment later
+                ids.append(j)
+                starts.append(s)
+        self._ids, self._starts = ids, starts
         self._best[e + 1], self._back[e + 1] = best, back
-        frontier = set(self._starts.tolist()) | {e + 1}
-        return self._emit_until(self._settled(frontier))
+        return self._emit_until(self._settled(set(starts) | {e + 1}))
 
     def close(self) -> list[Segment]:
         out = self._emit_until(self._n)
         if self._unknown is not None:
             out.append(self._unknown)
             self._unknown = None
-        self._rows, self._starts = np.empty((0, self.auto.n)), np.empty(0, dtype=np.int64)
+        self._ids, self._starts = [], []
         return out
 
     def _settled(self, frontier: set) -> int:
         """The latest position every best segmentation of the frontier positions passes."""
-        positions = set(frontier)
+        positions = frontier
         while len(positions) > 1:
             p = max(positions)
             positions.discard(p)
@@ -344,6 +374,8 @@ class Matcher:
         return head + [(s + lo, s + hi, action)] + tail
 
     def _emit_until(self, stop: int) -> list[Segment]:
+        if stop <= self._done:
+            return []
         path, p = [], stop
         while p > self._done:
             s, action, distance = self._back[p]

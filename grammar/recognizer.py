@@ -164,10 +164,13 @@ def recognize_interactions(doodle, compiled: Compiled, params: SegmenterParams |
 class Heard:
     """One thing the stream has decided: a segment of ``track`` (an action, a
     :class:`Refused` one, or an :class:`InteractionSegment` role once the interaction is
-    decided). Sample indices are the track's, from the stream's first sample."""
+    decided). Sample indices are the track's, from the stream's first sample. With
+    ``final`` False it is provisional: the action as the tokens so far stand
+    (:meth:`Live.push`), not decided yet."""
 
     track: str
     segment: Segment
+    final: bool = True
 
 
 class _Tape:
@@ -228,6 +231,8 @@ class _Chain:
                         if shapes is not None and auto is not None else None)
         self.tokens: list[Token] = []
         self.segments: list[Segment] = []
+        self._held = None  # what the provisional segments were last worked out from
+        self._refined_from, self._refined_to = None, []  # the Matcher's provisional segments, refined
 
     def feed(self, tokens: list[Token], tape: _Tape, close: bool = False) -> list[Segment]:
         if self.tokens_only:
@@ -251,16 +256,46 @@ class _Chain:
     def _refined(self, segments: list[Segment], tape: _Tape, token, close: bool = False) -> list[Segment]:
         if self.refiner is None:
             return segments
-        view = tape.track(self.name)
-        k = self.offset
-        self.refiner.p, self.refiner.valid, self.refiner.q = view.p[k:], view.valid[k:], view.q[k:]
-        for other in self.refiner.others:
-            o = tape.track(other)
-            self.refiner.others[other] = (o.p[k:], o.q[k:], o.valid[k:])
+        self._bind(self.refiner, tape)
         if token is not None:
             self.refiner.tokens.append(token)
         out = self.refiner.push(segments)
         return out + self.refiner.close() if close else out
+
+    def _bind(self, refiner: Refiner, tape: _Tape) -> None:
+        """Give the Refiner the samples known so far (this track's and the others')."""
+        view = tape.track(self.name)
+        k = self.offset
+        refiner.p, refiner.valid, refiner.q = view.p[k:], view.valid[k:], view.q[k:]
+        for other in refiner.others:
+            o = tape.track(other)
+            refiner.others[other] = (o.p[k:], o.q[k:], o.valid[k:])
+
+    def provisional(self, tape: _Tape) -> list[Segment] | None:
+        """The segments not final yet, as the tokens stand: the Matcher's segments that no
+        continuation it still keeps can change, given the tokens the Segmenter holds back
+        as they stand (:meth:`Segmenter.held`) — the rules the final decision uses, on a
+        copy — then re-decided by the learned shapes as if the stream ended there. None
+        when what the Segmenter holds back is as it was at the last call."""
+        if self.matcher is None:
+            return None
+        if (len(self.tokens), self.segmenter.held_key()) == self._held:
+            return None
+        held = self.segmenter.held()
+        self._held = (len(self.tokens), self.segmenter.held_key())  # as reading it left it
+        matcher = self.matcher.fork()
+        segments = [s for token in held for s in matcher.push(token)]
+        if matcher.unknown is not None:  # as it stands (a learned action may be found in it)
+            segments.append(matcher.unknown)
+        if self.refiner is None:
+            return segments
+        settled = (self.matcher.done, tuple((s.action, s.first, s.stop) for s in segments))
+        if settled != self._refined_from:  # the shapes are compared again once the Matcher's segments change
+            refiner = self.refiner.fork()
+            self._bind(refiner, tape)
+            refiner.tokens.extend(held)
+            self._refined_from, self._refined_to = settled, refiner.push(segments) + refiner.close()
+        return self._refined_to
 
 
 def _shifted(s: Segment, samples: int, tokens: int) -> Segment:
@@ -271,11 +306,12 @@ def _shifted(s: Segment, samples: int, tokens: int) -> Segment:
 
 @dataclass(frozen=True)
 class Step:
-    """What one frame (or the end of the stream) made final."""
+    """What one frame (or the end of the stream) made final, and what it made provisional."""
 
     tokens: dict  # track -> tokens made final (sample indices from the stream's start)
     heard: list  # Heard, in the order they were decided
     restarted: dict  # track -> why its recognition started afresh at this frame
+    provisional: list = ()  # Heard (final False): actions newly provisional at this frame
 
 
 class Live:
@@ -291,13 +327,22 @@ class Live:
     final (live recording); without, the error propagates (a file is read as a whole).
     ``compiled`` None streams the tokens alone (a library with nothing to recognise yet):
     no segments, and :attr:`result` has each track's tokens with none.
+
+    Provisional actions (``provisional``, on by default): a step also carries, in
+    :attr:`Step.provisional`, the actions the tokens so far already decide if what the
+    Segmenter still holds back stands as it is (its tokens not final yet, a pause once it
+    could be one) — the final decision's own rules on a copy of each track's Matcher, so
+    that a segment is provisional only once no continuation the Matcher still keeps could
+    change it: typically as soon as the pause after a gesture could be a pause, long before
+    the pause ends and makes it final. Each is reported once (again if its name changes);
+    interactions are only reported final.
     """
 
     def __init__(self, compiled: Compiled | None, names: list[str], rate: float, params: SegmenterParams = SegmenterParams(),
                  threshold: float = 2.0, source: str = "<stream>", automata: dict | None = None,
-                 restart: bool = False):
+                 restart: bool = False, provisional: bool = True):
         self.compiled, self.names, self.rate, self.params = compiled, list(names), float(rate), params
-        self.threshold, self.source, self.restart = threshold, source, restart
+        self.threshold, self.source, self.restart, self.provisional = threshold, source, restart, provisional
         if automata is None:
             automata = track_automata(compiled, self.names, threshold) if compiled is not None else {}
         self.automata = automata
@@ -308,6 +353,7 @@ class Live:
         self._pairs = two_handed(compiled) if compiled is not None else {}
         self._laying = []  # two-handed segments still to be heard on their other tracks
         self._state = {n: frozenset(compiled.library.states if compiled is not None else ()) for n in self.names}
+        self._shown = {n: [] for n in self.names}  # the provisional segments last reported, per track
         self._contexter = None
         if compiled is not None and len(self.names) > 1 and compiled.library.interactions:
             self._contexter = LiveContexter(self.tape, compiled, threshold)
@@ -339,7 +385,35 @@ class Live:
             heard += self._heard(name, self.chains[name].feed(new, self.tape), new)
         if self._laying:
             heard += self._lay()
-        return Step(tokens, heard, restarted)
+        provisional = [h for name in self.names for h in self._provisional(name)] if self.provisional else []
+        return Step(tokens, heard, restarted, provisional)
+
+    def _provisional(self, name: str) -> list[Heard]:
+        """A track's actions newly provisional (:meth:`_Chain.provisional`): behaviour
+        states applied as they would be (a refused one is no action), a two-handed action as
+        its first role; each reported once, and again only if its name changes."""
+        chain = self.chains[name]
+        segments = chain.provisional(self.tape)
+        if segments is None:
+            return []
+        shift, state = len(self._done[name][0]), self._state[name]
+        shown, out = [], []
+        for s in segments:
+            s = _shifted(s, chain.offset, shift)
+            rule = self._rules.get(s.action)
+            if rule is not None:
+                if not rule.allowed(state):
+                    continue
+                state = rule.after(state)
+            if s.action == "unknown":
+                continue
+            if s.action in self._pairs:
+                s = _role(s, s.first, s.stop, 0)
+            shown.append(s)
+            if not any(o.action == s.action and o.start < s.end and s.start < o.end for o in self._shown[name]):
+                out.append(Heard(name, s, final=False))
+        self._shown[name] = shown
+        return out
 
     def close(self, flush: dict | None = None) -> Step:
         """End every track; ``flush[name]`` False ends a track where its classification

@@ -24,6 +24,7 @@ recurrence vectorised over templates), about 0.2 ms for 33 templates of 31 steps
 
 from __future__ import annotations
 
+import copy
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -456,6 +457,12 @@ class Refiner:
         self._done = 0  # tokens before this are decided
         self._unknown = None
         self._deferred = False  # the pending unknown run waits for the segment after it to be searched
+
+    def fork(self) -> "Refiner":
+        """An independent copy (what it is pushed leaves this one as it is)."""
+        other = copy.copy(self)
+        other.tokens, other._waiting, other.others = list(self.tokens), list(self._waiting), dict(self.others)
+        return other
 
     def push(self, segments: list) -> list:
         """Segments from the Matcher (in order) → segments decided so far."""

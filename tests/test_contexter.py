@@ -12,7 +12,7 @@ from doodle.synth.strokes import stroke, synth_doodle
 from grammar.constraints import (Behaviour, Constraint, State, ground_front, mutual_view, parse_constraint,
                                  sees, within, zone_distance)
 from grammar.contexter import Contexter, InteractionSegment
-from grammar.recognizer import recognize_interactions
+from grammar.recognizer import recognize, recognize_interactions
 from grammar.library import compile_library, overlaps
 from grammar.matcher import Segment
 from library.manifest import Interaction, builtin, format_library, load_library
@@ -85,6 +85,29 @@ def test_ground_front_of_quaternions():
     assert np.allclose(ground_front(pitch), [0, 0, 1])
     up = (-np.sin(np.pi / 4), 0.0, 0.0, np.cos(np.pi / 4))  # pointing straight up: no front
     assert np.allclose(ground_front(up), 0.0)
+
+
+def test_constraints_at_every_sample_are_the_constraints_at_each():
+    """The Contexter evaluates a constraint over all the samples of an overlap at once; each
+    sample's answer is the one-state constraint's (the same arithmetic)."""
+    rng = np.random.default_rng(3)
+    p_i, p_j = rng.normal(0, 0.3, (200, 3)), rng.normal(0, 0.3, (200, 3))
+    p_j[:5] = p_i[:5]  # at one place: nothing to look towards
+    f_i, f_j = ground_front(rng.normal(size=(200, 4))), ground_front(rng.normal(size=(200, 4)))
+    for c in (Constraint("D", 0, 1, "personal"), Constraint("D", 0, 1, 0.3), Constraint("V", 0, 1, 0.5),
+              Constraint("V", 0, 1, -0.2), Constraint("MV", 0, 1, -0.5)):
+        every = c.holds_all(p_i, f_i, 0.1, p_j, f_j, 0.12)
+        each = [c.holds(State(a, b, 0.1), State(x, y, 0.12)) for a, b, x, y in zip(p_i, f_i, p_j, f_j)]
+        assert every.tolist() == each and 0 < every.sum() < 200
+
+
+def test_a_contexter_remembers_what_it_worked_out_of_one_doodle_only():
+    slap = scene(SLAP, SLAPPED, 0.3)
+    far = scene(SLAP, SLAPPED, 3.0)
+    contexter = Contexter(COMPILED.library.interactions)
+    for doodle, found in ((slap, 1), (far, 0), (slap, 1)):
+        segments = {n: segs for n, (_, segs) in recognize(doodle, COMPILED, interactions=False).items()}
+        assert len(contexter.select(doodle, segments)) == found
 
 
 def test_behaviour_pre_and_post_conditions():

@@ -13,6 +13,9 @@ track goes through the streaming Recognizer (:class:`grammar.recognizer.Live`), 
 * ``"action"`` — ``track``, ``action``, ``start``, ``end`` (s), ``exact``, ``distance``, ``at``
   (the recording time when it was recognised); an interaction's roles come once more, with
   ``interaction`` and ``role``, once the interaction is decided;
+* ``"provisional"`` — the same fields, before that: an action as soon as the tokens so far
+  say it (:class:`grammar.recognizer.Live`; ``start`` and ``end`` as they stand — a pause's
+  end is where it has got to), which the ``"action"`` that decides it may name differently;
 * ``"refused"`` — ``track``, ``action``, ``reason``, ``start``, ``end``, ``at``: an action
   whose behaviour pre-conditions did not hold (§6.3.3);
 * ``"lost"`` — ``track``, ``t``, ``error``: tracking went away (``error`` None); or, when it
@@ -115,9 +118,13 @@ class _Live:
             for token in tokens:
                 start, end = self._span(token.start, token.end)
                 self.emit("token", {"track": name, "token": token.name, "start": start, "end": end, "final": True})
-        for h in step.heard:
+        for h in list(step.provisional) + step.heard:
             s = h.segment
             start, end = self._span(s.start, s.end)
+            if not h.final:  # what the tokens so far say, not decided yet
+                self.emit("provisional", {"track": h.track, "action": s.action, "start": start, "end": end,
+                                          "exact": s.exact, "distance": s.distance, "at": self.times[-1]})
+                continue
             if isinstance(s, Refused):
                 self.emit("refused", {"track": h.track, "action": s.refused, "reason": s.reason,
                                       "start": start, "end": end, "at": self.times[-1]})

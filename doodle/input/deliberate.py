@@ -40,6 +40,7 @@ get final tokens); the batch Segmenter runs the same stage to the end, so both a
 
 from __future__ import annotations
 
+import copy
 import math
 
 from doodle.core.tokens import Token
@@ -95,10 +96,33 @@ class Absorber:
             return False if self._closed else None
         if self._raw[i + 1][1] < self.floor and i + 2 >= len(self._raw) and not self._closed:
             return None  # a flicker follows: a still after it would join this one
-        if tok.end - tok.start < self.pause:
+        return self._short(tok, self._raw[i - 1][2][1], self._raw[i + 1][2][0])
+
+    def _short(self, still: Token, before: int, after: int) -> bool:
+        """Whether a still between movements is a hold by its length: under ``pause_s``, or
+        with less than ``REST_S`` of rest beyond the slowing ends of the movements around it
+        (``before``, ``after``: the samples each takes from its last, and to its first,
+        sample over 2ε)."""
+        if still.end - still.start < self.pause:
             return True
-        slowing = SLOWING * (self._raw[i - 1][2][1] + self._raw[i + 1][2][0])
-        return tok.end - tok.start - slowing < self.rest
+        return still.end - still.start - SLOWING * (before + after) < self.rest
+
+    def pause_from(self, still: Token) -> float:
+        """The sample from which a still in progress (not pushed yet) would be a pause were a
+        movement to begin there — the earliest it can be known to be one: the next
+        movement's slowing start, unknown yet, only makes a hold likelier."""
+        before = len(self._raw) - 1  # the movement before it
+        if self._joins(still):
+            still, before = Token(STILL, self._raw[-2][0].start, still.end), before - 2
+        if self.pause <= 0 or still.start == 0 or before < 0:
+            return still.start
+        return still.start + min(self.longest_hold, max(self.pause, self.rest + SLOWING * self._raw[before][2][1]))
+
+    def copy(self) -> "Absorber":
+        """An independent copy (what it is pushed leaves this one as it is)."""
+        other = copy.copy(self)
+        other._raw, other._decided = list(self._raw), list(self._decided)
+        return other
 
     def _is_pause(self, i: int) -> bool | None:
         """Whether raw token i is a still that separates movements (None: not known yet)."""
@@ -155,15 +179,18 @@ class Absorber:
     def push(self, token: Token, ext: float, ramps: tuple[int, int] = (0, 0)) -> list[Token]:
         """Add a raw token with its extent (m) and ramps: the samples from its start to its
         first sample faster than 2ε, and from its last such sample to its end."""
-        raw = self._raw
-        if (token.name == STILL and len(raw) - self._next >= 2 and raw[-2][0].name == STILL
-                and raw[-1][0].name != STILL and raw[-1][1] < self.floor):
-            # a still, a flicker below any deliberate movement, a still: one still (so a
-            # noisy pause is judged by its whole length)
-            raw[-2:] = [(Token(STILL, raw[-2][0].start, token.end), 0.0, (0, 0))]
+        if self._joins(token):  # a still, a flicker below any deliberate movement, a still: one still
+            self._raw[-2:] = [(Token(STILL, self._raw[-2][0].start, token.end), 0.0, (0, 0))]
         else:
-            raw.append((token, ext, ramps))
+            self._raw.append((token, ext, ramps))
         return self._advance()
+
+    def _joins(self, token: Token) -> bool:
+        """Whether a still joins the undecided still before the flicker it follows (so a
+        noisy pause is judged by its whole length)."""
+        raw = self._raw
+        return (token.name == STILL and len(raw) - self._next >= 2 and raw[-2][0].name == STILL
+                and raw[-1][0].name != STILL and raw[-1][1] < self.floor)
 
     def close(self) -> list[Token]:
         self._closed = True

@@ -26,6 +26,7 @@ zero or more tokens; ``close`` flushes) give identical tokens.
 
 from __future__ import annotations
 
+import copy
 import math
 from dataclasses import dataclass, replace
 
@@ -276,6 +277,7 @@ class Segmenter:
         self._fast2 = 4.0 * params.eps * params.eps
         self._tok_fast = self._run_fast = None  # (first, last) sample over 2ε: token before the run, the run
         self._since: list = []  # runs shorter than α since the last confirmed one (corner candidates)
+        self._pause: tuple | None = None  # (start, samples classified from which it may be a pause) of the still :meth:`held` last read
 
     @property
     def pending(self) -> Token | None:
@@ -335,6 +337,44 @@ class Segmenter:
             out += self._absorber.push(tok, extent(self._cur_row, self._last_row, self.params.theta), self._ramps(tok))
             self._cur = None
         return out + self._absorber.close()
+
+    def held(self) -> list[Token]:
+        """The tokens not final yet, as they stand (provisional): what :meth:`cut` would
+        give were the stream to end now, worked out on a copy. A still in progress is read
+        through the samples still being smoothed (smoothed as at the end of a file) and left
+        out while it could not be a pause yet — were a movement to begin now, by the
+        Absorber's rule (:meth:`Absorber.pause_from`): it may be a hold, the movement before
+        it going on."""
+        peek, out = self._fork(), []
+        if self._cur == STILL:
+            for row in peek._smoother.close():
+                peek._classify(row, out)
+        if peek._cur == STILL:
+            pause = peek._absorber.pause_from(Token(NAMES[STILL], peek._cur_start, peek._n))
+            self._pause = (self._cur_start, pause - (peek._n - self._n))  # ... once this many samples are classified
+            if peek._n < pause:
+                return out + peek._absorber.close()
+        return out + peek.cut()
+
+    def held_key(self) -> tuple:
+        """What :meth:`held` depends on, cheaply (for every frame): the token in progress and
+        where it starts; for a movement, whether it has covered the floor under which it
+        is absorbed; for a still, whether it may be a pause by now (as :meth:`held` last
+        found)."""
+        if self._cur is None:
+            return (None,)
+        if self._cur == STILL:
+            pause = self._pause[1] if self._pause is not None and self._pause[0] == self._cur_start else 0
+            return self._cur, self._cur_start, self._n >= pause
+        return self._cur, self._cur_start, extent(self._cur_row, self._last_row, self.params.theta) >= self._absorber.floor
+
+    def _fork(self) -> "Segmenter":
+        """An independent copy for :meth:`held` (no more samples are pushed to it)."""
+        other = copy.copy(self)
+        other._absorber, other._since = self._absorber.copy(), list(self._since)
+        if self._cur == STILL:
+            other._smoother = self._smoother.fork()
+        return other
 
     def _smooth(self, sample: tuple, out: list[Token]) -> None:
         t, (px, py, pz), (qx, qy, qz, qw) = sample

@@ -18,6 +18,7 @@ arithmetic in the same order and give bit-identical results.
 
 from __future__ import annotations
 
+import copy
 from collections import deque
 
 import numpy as np
@@ -138,6 +139,16 @@ class StreamingSmoother:
         for j in range(self.h, 0, -1):
             self._feed(2.0 * head[0] - head[j])
         return [y for y in map(self._feed, head) if y is not None]
+
+    def fork(self) -> "StreamingSmoother":
+        """An independent copy (what it is pushed, or closing it, leaves this one as it is)."""
+        other = copy.copy(self)
+        keep = min(self.fill, self.width - 1)  # all a window can still read
+        other.buf = np.zeros_like(self.buf[: max(4 * self.width, keep + 1)])
+        other.buf[:keep] = self.buf[self.fill - keep: self.fill]
+        other.fill, other.tmp = keep, np.zeros_like(self.tmp)
+        other.head, other.last = list(self.head), deque(self.last, maxlen=self.last.maxlen)
+        return other
 
     def close(self) -> list[np.ndarray]:
         """Rows not yet returned, using the end reflection (or unsmoothed if too short)."""

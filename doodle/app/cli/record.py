@@ -45,8 +45,9 @@ def _open_source(args):
 
 
 class _View:
-    """The live terminal view: one line per action, lost/found tracking, and on a terminal
-    the tokens in progress on a line that keeps being rewritten."""
+    """The live terminal view: one line per action — first marked ``(provisional)`` as soon as
+    the tokens so far say it, then again once decided — lost/found tracking, and on a
+    terminal the tokens in progress on a line that keeps being rewritten."""
 
     def __init__(self, out=None):
         out = out or sys.stdout  # looked up now, not at import: the stream may have been replaced
@@ -62,8 +63,8 @@ class _View:
                   flush=True)
 
     def __call__(self, kind: str, e: dict) -> None:
-        if kind == "action":
-            how = "" if e["exact"] else f"  (distance {e['distance']:g})"
+        if kind in ("action", "provisional"):
+            how = "  (provisional)" if kind == "provisional" else "" if e["exact"] else f"  (distance {e['distance']:g})"
             role = f"  [{e['interaction']}, role {e['role']}]" if "interaction" in e else ""
             self.line(f"  {e['start']:7.2f} s  {e['track']}  {e['action']}{how}{role}")
         elif kind == "refused":

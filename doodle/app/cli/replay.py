@@ -26,7 +26,7 @@ def cmd_replay(args) -> int:
 
     from doodle.app.cli.options import load_input, segmenter_params
     from doodle.app.libcache import compiled_actions as load_actions
-    from doodle.app.replay import replay
+    from doodle.app.replay import latencies, replay
 
     if not (args.speed >= 0 and np.isfinite(args.speed)):
         raise DoodleError(f"--speed must be 0 (flat out) or a positive number, not {args.speed:g}")
@@ -37,7 +37,7 @@ def cmd_replay(args) -> int:
     print(f"{args.file}: {len(doodle.tracks)} track(s), {doodle.t[-1]:.2f} s, replayed {pace}", flush=True)
 
     def show(r):
-        how = "exact" if r.exact else f"distance {r.distance:g}"
+        how = "provisional" if not r.final else "exact" if r.exact else f"distance {r.distance:g}"
         role = f"  [{r.interaction}, role {r.role}]" if r.interaction else ""
         print(f"  {r.at:8.2f} s  {r.track}  {r.action:<16} {r.start:7.2f}–{r.end:7.2f} s  {how:<12} "
               f"latency {r.latency:.2f} s{role}", flush=True)
@@ -45,9 +45,11 @@ def cmd_replay(args) -> int:
     replayed = replay(doodle, compiled, params, args.speed or None, show, threshold=args.threshold)
     found, costs = replayed.found, replayed.costs
     actions = [r for r in found if not r.interaction]
-    lat = [r.latency for r in actions]
     together = len({(r.interaction, r.start) for r in found if r.interaction and r.role == 0})
-    print(f"{len(actions)} action(s){f', {together} interaction(s)' if together else ''}; latency after a gesture ends: median {np.median(lat) if lat else 0:.2f} s; "
+    soon = latencies(doodle, replayed)
+    after = (f"a gesture's name shown after it ends: median {np.median(soon.named):.2f} s, decided: median "
+             f"{np.median(soon.final):.2f} s" if soon.final else "no gesture")
+    print(f"{len(actions)} action(s){f', {together} interaction(s)' if together else ''}; {after}; "
           f"processing per frame: p50 {np.percentile(costs, 50) * 1e3:.3f} ms, p99 {np.percentile(costs, 99) * 1e3:.3f} ms",
           file=sys.stdout)
     return 0
