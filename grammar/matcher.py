@@ -214,7 +214,7 @@ class Automaton:
         return {"initial": self.initial, "sizes_counted": self.sizes_counted,
                 "step_lengths": np.array([len(a) for a in self.step_src], dtype=np.int64),
                 "step_src": np.concatenate(self.step_src), "step_cost": np.concatenate(self.step_cost),
-                "step_off": np.stack(self.step_off)}
+                "step_off": np.stack(self.step_off), "reads": np.concatenate([r.ravel() for r in self.reads])}
 
     def _restore(self, tables: dict) -> None:
         """The tables of :meth:`tables`, checked against this automaton's shape (ValueError if
@@ -231,6 +231,12 @@ class Automaton:
         self.step_src = [a.astype(np.int64) for a in np.split(src, cuts)]
         self.step_cost = [a.astype(float) for a in np.split(cost, cuts)]
         self.step_off = [a.astype(np.int64) for a in off]
+        reads = np.asarray(tables["reads"], dtype=float)
+        counts = [N_CODES * q * q for q in self.sizes]
+        if reads.shape != (sum(counts),):
+            raise ValueError("automaton tables do not fit")
+        self.reads = [r.reshape(N_CODES, q, q) for r, q in zip(np.split(reads, np.cumsum(counts)[:-1]), self.sizes)]
+        self.rows = RowTable(self)
 
     def most_specific(self, candidates: np.ndarray) -> int:
         """Among candidate actions, the one with the narrowest language: the fewest accepted

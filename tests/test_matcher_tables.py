@@ -135,3 +135,21 @@ def test_longest_way_to_acceptance(node):
                 longest = k
         expected = np.inf if longest > q else longest
         assert got[p] == expected
+
+
+def test_an_automaton_read_back_from_its_tables_matches_the_same():
+    """What the disk cache keeps (``Automaton.tables``) rebuilds an automaton whose Matcher
+    gives the same segments (the interned rows included)."""
+    compiled = load_actions()
+    key = (2.0, False, None, None)
+    fresh = compiled.automaton(*key)
+    back = compiled.automaton_from(key, fresh.tables())
+    rng, alphabet, words = np.random.default_rng(3), sorted(CODES), []
+    while len(words) < 300:
+        sampled = sample(compiled.dfas[int(rng.integers(len(compiled.dfas)))], rng)
+        words += [alphabet[int(rng.integers(len(alphabet)))] if rng.random() < 0.1 else w for w in sampled]
+        words.append("T_STILL")
+    tokens = tokens_of([w for i, w in enumerate(words) if i == 0 or w != words[i - 1]])
+    assert same(match(tokens, back), match(tokens, fresh))
+    with pytest.raises(ValueError):
+        compiled.automaton_from(key, {**fresh.tables(), "reads": fresh.tables()["reads"][:-1]})
