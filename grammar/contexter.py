@@ -258,6 +258,9 @@ class LiveContexter:
         self.role_matchers = {n: Matcher(auto, n) for n in names} if auto is not None else {}
         self.role_frontier = {n: -np.inf for n in names} if auto is not None else {}
         self._reported = set()
+        self._roles = {a for rule in self.contexter.rules for a in rule.actions}  # what may join one
+        self._selected: list = []  # the Contexter's selection, (Found, segments), as of the last new segment
+        self._stale = False  # a segment has joined the pools since
 
     def push_token(self, track: str, token) -> list:
         """One token of a track (for the role Matchers); returns newly recognised interactions."""
@@ -281,16 +284,23 @@ class LiveContexter:
         tr = self.doodle.track(track)
         for s in segments:
             frontier[track] = max(frontier[track], _time(tr, s.end - 1))
-            if s.action != "unknown":
+            if s.action in self._roles:  # only a role's action may join an interaction
                 self.pools[track].append(s)
+                self._stale = True
         return self._check() if check and self.contexter.rules else []
 
     def _check(self, final: bool = False) -> list:
-        """Newly recognised interactions: ``(Found, [segment per role])``."""
+        """Newly recognised interactions: ``(Found, [segment per role])``. The selection is
+        made again only when a segment has joined the pools: a segment forgotten since (all
+        tracks decided past it) took part in no candidate still to report, and candidates
+        that shared none of its segments are taken or not as before."""
         decided = min(min(self.frontier.values()), min(self.role_frontier.values(), default=np.inf))
+        if self._stale:
+            self._selected = [(f, [self.pools[tr][x] for tr, x in zip(f.tracks, f.indices)])
+                              for f in self.contexter.select(self.doodle, self.pools)]
+            self._stale = False
         out = []
-        for f in self.contexter.select(self.doodle, self.pools):
-            segs = [self.pools[tr][x] for tr, x in zip(f.tracks, f.indices)]
+        for f, segs in self._selected:
             key = (f.interaction, tuple((tr, s.first, s.action) for tr, s in zip(f.tracks, segs)))
             if key not in self._reported and (final or decided >= f.t1):
                 self._reported.add(key)
