@@ -84,7 +84,8 @@ def mutual_view(f_i, f_j, beta: float) -> bool:
 
 def within_all(p_i: np.ndarray, p_j: np.ndarray, threshold: float) -> np.ndarray:
     """:func:`within` at every time of (n, 3) positions."""
-    return np.linalg.norm(p_j - p_i, axis=-1) <= threshold
+    d = p_j - p_i
+    return np.sqrt((d * d).sum(axis=-1)) <= threshold  # np.linalg.norm's arithmetic, without its checks
 
 
 def sees_all(p_i: np.ndarray, f_i: np.ndarray, p_j: np.ndarray, gamma: float) -> np.ndarray:
@@ -92,7 +93,7 @@ def sees_all(p_i: np.ndarray, f_i: np.ndarray, p_j: np.ndarray, gamma: float) ->
     look towards, so not seen)."""
     d = p_j - p_i
     d[:, 1] = 0.0
-    n = np.linalg.norm(d, axis=-1)
+    n = np.sqrt((d * d).sum(axis=-1))
     return (n >= 1e-9) & ((d * f_i).sum(axis=-1) / np.maximum(n, 1e-9) >= gamma)
 
 

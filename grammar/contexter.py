@@ -93,7 +93,7 @@ class Contexter:
         self.radius, self.mode = radius, mode
         self._doodle = None  # the doodle read so far, and of it:
         self._held: dict = {}  # (rule, tracks, overlap) -> whether the constraints hold there
-        self._front: dict = {}  # track -> its fronts so far
+        self._known: dict = {}  # track -> its samples' usability and fronts so far
 
     def _radius(self, track: str) -> float:
         return float(self.radius.get(track, RADIUS)) if isinstance(self.radius, dict) else float(self.radius)
@@ -104,7 +104,7 @@ class Contexter:
         worked out once per Contexter (the live one asks again as segments come: the
         samples of an overlap, all in the past, do not change)."""
         if doodle is not self._doodle:  # what is remembered is of one doodle
-            self._doodle, self._held, self._front = doodle, {}, {}
+            self._doodle, self._held, self._known = doodle, {}, {}
         tracks = {tr.name: tr for tr in doodle.tracks}
         names = [n for n in segments if n in tracks]
         spans = {n: [(_time(tracks[n], s.start), _time(tracks[n], s.end)) for s in segments[n]] for n in names}
@@ -132,16 +132,16 @@ class Contexter:
         if not rule.constraints:
             return True
         ref = tracks[0].t
-        times = ref[(ref >= t0) & (ref <= t1)]
-        if len(times) == 0:
-            times = np.array([(t0 + t1) / 2])
+        a, b = int(np.searchsorted(ref, t0, side="left")), int(np.searchsorted(ref, t1, side="right"))
+        times = ref[a:b] if b > a else np.array([(t0 + t1) / 2])
         poses = []
         ok = np.ones(len(times), dtype=bool)
         for tr in tracks:
-            idx = _nearest(tr.t, times)
-            p, q = tr.p[idx], tr.q[idx]
-            ok &= tr.valid[idx] & np.isfinite(p).all(axis=1) & np.isfinite(q).all(axis=1)
-            poses.append((p, self._fronts(tr, int(idx.max()))[idx], self._radius(tr.name)))
+            shared = b > a and len(tr.t) == len(ref) and _start(tr.t) == _start(ref)  # sampled together
+            idx = slice(a, b) if shared else _nearest(tr.t, times)
+            usable, fronts = self._poses(tr, b - 1 if shared else int(idx.max()))
+            ok &= usable[idx]
+            poses.append((tr.p[idx], fronts[idx], self._radius(tr.name)))
         holds = ok.copy()  # every constraint at once, at every valid sample
         for c in rule.constraints:
             (p_i, f_i, r_i), (p_j, f_j, r_j) = poses[c.i], poses[c.j]
@@ -150,15 +150,18 @@ class Contexter:
             return bool(holds.any())
         return bool(ok.any()) and bool((holds == ok).all())
 
-    def _fronts(self, track, last: int) -> np.ndarray:
-        """The track's ground-plane fronts (:func:`ground_front`) up to sample ``last`` at
-        least, worked out once per sample (a sample's pose does not change)."""
-        known = self._front.get(track.name, np.empty((0, 3)))
-        if len(known) <= last:
-            q = track.q[len(known):]
-            known = np.concatenate([known, ground_front(np.where(np.isfinite(q), q, [0.0, 0.0, 0.0, 1.0]))])
-            self._front[track.name] = known
-        return known
+    def _poses(self, track, last: int) -> tuple[np.ndarray, np.ndarray]:
+        """Per sample of the track up to ``last`` at least: whether it can be read (tracked,
+        finite) and its ground-plane front (:func:`ground_front`), worked out once per
+        sample (a sample's pose does not change)."""
+        usable, fronts = self._known.get(track.name, (np.empty(0, dtype=bool), np.empty((0, 3))))
+        if len(usable) <= last:
+            k = len(usable)
+            p, q = track.p[k:], track.q[k:]
+            usable = np.concatenate([usable, track.valid[k:] & np.isfinite(p).all(axis=1) & np.isfinite(q).all(axis=1)])
+            fronts = np.concatenate([fronts, ground_front(np.where(np.isfinite(q), q, [0.0, 0.0, 0.0, 1.0]))])
+            self._known[track.name] = (usable, fronts)
+        return usable, fronts
 
     def resolve(self, doodle, segments: dict[str, list[Segment]]) -> dict[str, list[Segment]]:
         """Per track, its segments with those of recognised interactions relabelled."""
@@ -231,6 +234,11 @@ def _time(track, index: int) -> float:
     return float(track.t[min(max(index, 0), len(track.t) - 1)])
 
 
+def _start(t: np.ndarray) -> int:
+    """Where an array's data starts (two views of one array of times start together)."""
+    return t.__array_interface__["data"][0]
+
+
 def _nearest(t: np.ndarray, times: np.ndarray) -> np.ndarray:
     if len(t) < 2:
         return np.zeros(len(times), dtype=np.int64)
@@ -258,6 +266,9 @@ class LiveContexter:
         self.role_matchers = {n: Matcher(auto, n) for n in names} if auto is not None else {}
         self.role_frontier = {n: -np.inf for n in names} if auto is not None else {}
         self._reported = set()
+        self._roles = {a for rule in self.contexter.rules for a in rule.actions}  # what may join one
+        self._selected: list = []  # the Contexter's selection, (Found, segments), as of the last new segment
+        self._stale = False  # a segment has joined the pools since
 
     def push_token(self, track: str, token) -> list:
         """One token of a track (for the role Matchers); returns newly recognised interactions."""
@@ -281,16 +292,23 @@ class LiveContexter:
         tr = self.doodle.track(track)
         for s in segments:
             frontier[track] = max(frontier[track], _time(tr, s.end - 1))
-            if s.action != "unknown":
+            if s.action in self._roles:  # only a role's action may join an interaction
                 self.pools[track].append(s)
+                self._stale = True
         return self._check() if check and self.contexter.rules else []
 
     def _check(self, final: bool = False) -> list:
-        """Newly recognised interactions: ``(Found, [segment per role])``."""
+        """Newly recognised interactions: ``(Found, [segment per role])``. The selection is
+        made again only when a segment has joined the pools: a segment forgotten since (all
+        tracks decided past it) took part in no candidate still to report, and candidates
+        that shared none of its segments are taken or not as before."""
         decided = min(min(self.frontier.values()), min(self.role_frontier.values(), default=np.inf))
+        if self._stale:
+            self._selected = [(f, [self.pools[tr][x] for tr, x in zip(f.tracks, f.indices)])
+                              for f in self.contexter.select(self.doodle, self.pools)]
+            self._stale = False
         out = []
-        for f in self.contexter.select(self.doodle, self.pools):
-            segs = [self.pools[tr][x] for tr, x in zip(f.tracks, f.indices)]
+        for f, segs in self._selected:
             key = (f.interaction, tuple((tr, s.first, s.action) for tr, s in zip(f.tracks, segs)))
             if key not in self._reported and (final or decided >= f.t1):
                 self._reported.add(key)

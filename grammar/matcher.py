@@ -356,8 +356,8 @@ class Matcher:
         walks = [a for a in range(len(auto.names)) if auto.cyclic[a]]
 
         def walk(part):
-            found = np.array([a for a in walks if auto.dfas[a].accepts(part)], dtype=np.int64)
-            return auto.most_specific(found) if len(found) else None
+            found = [a for a in walks if auto.dfas[a].accepts(part)]
+            return auto.most_specific(np.array(found, dtype=np.int64)) if found else None
 
         def samples(i, j):
             return self._tokens[j - 1].end - self._tokens[i].start
