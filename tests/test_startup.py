@@ -314,12 +314,14 @@ def test_a_broken_cache_entry_is_ignored_and_rebuilt(cache_dir, tmp_path, damage
                 meta = np.load(z.open("meta.npy"))
             np.savez(path, meta=meta, c0_translations=np.zeros((2, 2)), dfa0_table=np.zeros(3),
                      step_lengths=np.ones(3, dtype=np.int64))
-        else:  # an object array: never unpickled
-            np.save(path.with_suffix(".tmp.npy"), np.array([{"a": 1}], dtype=object), allow_pickle=True)
+        else:  # an array declaring objects (a pickle would follow): refused unread
+            import io
             import zipfile
 
+            header = io.BytesIO()
+            np.lib.format.write_array_header_1_0(header, {"descr": "|O", "fortran_order": False, "shape": (1,)})
             with zipfile.ZipFile(path, "w") as z:
-                z.write(path.with_suffix(".tmp.npy"), "meta.npy")
+                z.writestr("meta.npy", header.getvalue() + b"\x80\x04not a pickle to load")
     with warnings.catch_warnings():
         warnings.simplefilter("error")  # not even a warning
         again = load_for_compile(lib)
