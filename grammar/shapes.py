@@ -82,7 +82,7 @@ def dtw_costs(x: np.ndarray, templates: np.ndarray) -> np.ndarray:
 
 # --- poses of one or several tracks: resampled together, as features ---------------------
 
-TURN = 1.0  # default weight of the controller's orientation axes beside the path's directions (both unit vectors)
+TURN = 0.5  # default weight of the controller's turn beside the path's directions (where a library cannot choose)
 
 
 def sample(poses, points: int = POINTS) -> tuple[np.ndarray, np.ndarray]:
@@ -112,9 +112,15 @@ def sample(poses, points: int = POINTS) -> tuple[np.ndarray, np.ndarray]:
 
 def features(paths: np.ndarray, quats: np.ndarray | None, turn: float | None = None) -> np.ndarray:
     """Per step of resampled tracks (T, n, 3) — and their orientations (T, n, 4) — the unit
-    direction of each track's step and, weighted by ``turn`` (default :data:`TURN`), its
-    controller's forward and up axes in the room at the step (the grip: how the hand is
-    turned as it moves): (n − 1, T·3) or (n − 1, T·9)."""
+    direction of each track's step and, weighted by ``turn`` (default :data:`TURN`), how its
+    controller has turned since the path's first point: the rotation ``q(s) q(0)⁻¹`` in the
+    room's frame applied to the room's three axes (n − 1, T·3) or (n − 1, T·12).
+
+    The turn since the start, not the controller's orientation itself: a controller held
+    in the hand at a grip offset ``g`` reads ``q = h g`` (``h`` the hand's orientation), so
+    ``q(s) q(0)⁻¹ = h(s) h(0)⁻¹`` — the same for every way of holding it. How the hand
+    turns as it moves (a hook's forearm roll, an uppercut's lift) is the person's gesture;
+    how they hold the controller is not."""
     from doodle.core import quat
 
     turn = TURN if turn is None else turn
@@ -125,7 +131,10 @@ def features(paths: np.ndarray, quats: np.ndarray | None, turn: float | None = N
             q = quats[k]
             mid = q[1:] + q[:-1] * np.where((q[1:] * q[:-1]).sum(1, keepdims=True) < 0, -1.0, 1.0)
             mid = mid / np.maximum(np.linalg.norm(mid, axis=1, keepdims=True), 1e-12)
-            cols += [turn * quat.rotate(mid, np.array([0.0, 0.0, 1.0])), turn * quat.rotate(mid, np.array([0.0, 1.0, 0.0]))]
+            mean = mid.sum(axis=0)
+            mean = mean / max(float(np.linalg.norm(mean)), 1e-12)
+            since = quat.multiply(mid, quat.conjugate(np.broadcast_to(mean, mid.shape)))
+            cols += [turn * quat.rotate(since, axis) for axis in np.eye(3)]
     return np.hstack(cols)
 
 
@@ -314,20 +323,19 @@ def shape_set(named: dict, expressions: dict, tracks: dict | None = None, cap: f
                     tuple(tuple(partners.get(n, ())) for n in names))
 
 
-TURNS = (0.0, 0.5, 1.0)  # the orientation weights a library chooses among (:func:`choose_turn`)
+TURNS = (0.0, 0.25, 0.5, 1.0)  # the orientation weights a library chooses among (:func:`choose_turn`)
 
 
 def choose_turn(shapes: list, owner: np.ndarray) -> float:
-    """The weight of the controllers' orientation in a group's features, chosen on its own
+    """The weight of the controllers' turn in a group's features, chosen on its own
     examples (``[(action, paths, quats)]``, ``owner`` their actions in order), leaving one
-    example out at a time: the weight in :data:`TURNS` that separates the actions most —
-    the mean log ratio of each example's distance to the nearest example of another
-    action over its distance to the nearest of its own (a smooth measure: with three
-    examples per action, how many are read right moves by one or two between weights) —
-    and on a tie the one reading most of them right. Orientation tells gestures apart when one person holds the controller the same
-    way each time; examples from several people, each holding it their own way, disagree
-    on it, and leaving an example out shows whether they do — nothing is tuned on the
-    performances to be recognised."""
+    example out at a time: the weight in :data:`TURNS` under which most examples are
+    nearest to an example of their own action; on a tie, the one separating the actions
+    most — the mean log ratio of each example's distance to the nearest example of another
+    action over its distance to the nearest of its own. Examples from several people show
+    whether their turns agree (an example left out is then read by the others' examples
+    alone); one person's show how much their turns tell their gestures apart — nothing is
+    tuned on the performances to be recognised."""
     if len(set(owner.tolist())) < 2 or len(owner) < 3:
         return TURN
     best, key = TURN, None
@@ -342,7 +350,7 @@ def choose_turn(shapes: list, owner: np.ndarray) -> float:
             right += int(rest[int(np.argmin(costs))] == owner[i])
             if len(own) and len(other):
                 ratios.append(other.min() / max(own.min(), 1e-9))
-        score = (float(np.mean(np.log(ratios))) if ratios else 0.0, right)
+        score = (right, float(np.mean(np.log(ratios))) if ratios else 0.0)
         if key is None or score > key:
             best, key = turn, score
     return best
@@ -527,16 +535,23 @@ class Refiner:
             if motion is not None:  # the whole motion between pauses is a window too, and no window leaves it
                 starts = sorted({f for f in starts if f >= motion[0]} | {motion[0]})
                 ends = [(lo, min(hi, motion[1])) for lo, hi in ends if lo <= motion[1]] + [(motion[1], motion[1])]
+            two = self._two(motion, known) if motion is not None else None
+            if two is not None:  # the motion is two gestures back to back
+                (f, c, k1, e1), (_, e, k2, e2) = two
+                if f < first:
+                    self._take_back(f)
+                return (self._spot_deferred(min(f, first), known) + self._emit(UNKNOWN, first, f, False, None)
+                        + self._emit(self.shapes.names[k1], f, c, e1 == 0.0, e1)
+                        + self._emit(self.shapes.names[k2], c, e, e2 == 0.0, e2)
+                        + self._emit(UNKNOWN, e, seg.stop, False, None))
             best = self._best(starts, ends, known, motion=motion)
         else:
             return self._emit(seg.action, first, seg.stop, seg.exact, seg.distance)
         if best is None:
             return self._spot_deferred(first, known) + self._emit(UNKNOWN, first, seg.stop, False, None)
         f, e, k, edits = best
-        if f < first:  # taken back from the pending unknown run
-            pending = self._unknown
-            self._unknown = None if f <= pending.first else replace(pending, stop=f, end=self.tokens[f - 1].end)
-            self._done = f
+        if f < first:
+            self._take_back(f)
         return (self._spot_deferred(min(f, first), known) + self._emit(UNKNOWN, first, f, False, None)
                 + self._emit(self.shapes.names[k], f, e, edits == 0.0, edits) + self._emit(UNKNOWN, e, seg.stop, False, None))
 
@@ -589,6 +604,60 @@ class Refiner:
         if known > a + SPOT_MAX:
             return None
         return (a, known) if closed and known > seg.first else "pending"
+
+    def _take_back(self, f: int) -> None:
+        """Tokens from ``f`` on taken back from the pending unknown run."""
+        pending = self._unknown
+        self._unknown = None if f <= pending.first else replace(pending, stop=f, end=self.tokens[f - 1].end)
+        self._done = f
+
+    def _two(self, motion, known: int):
+        """A motion between pauses read as two learned gestures back to back — ``(first, cut,
+        action, edits)`` and ``(cut, stop, action, edits)`` — when that explains it better than
+        one action: the two windows' scores (``edits + WEIGHT × shape distance``, each the
+        action it is nearest and within that action's rejection distance) sum to less than the
+        best one window's. Each gesture scores what it costs, so two are chosen over one only
+        when one fits markedly worse than two fit the parts. The windows may leave up to
+        :data:`TRIM` tokens out at either end of the motion; each part holds at least
+        :data:`SPOT_TOKENS` tokens. None otherwise."""
+        from doodle.core.tokens import CODES
+
+        a, b = motion
+        if b - a < 2 * SPOT_TOKENS:
+            return None
+        auto = self.shapes.automaton
+        heads, cuts = range(a, a + TRIM + 1), range(a + SPOT_TOKENS, b - SPOT_TOKENS + 1)
+        windows, edits = [], []
+        for f in sorted(set(heads) | set(cuts)):
+            d = auto.initial.copy()
+            for e in range(f + 1, b + 1):
+                d = auto.step(d, CODES[self.tokens[e - 1].name])
+                if (e >= b - TRIM or (f in heads and e in cuts)) and e - f >= SPOT_TOKENS \
+                        and int(self.valid[self.tokens[f].start:self.tokens[e - 1].end].sum()) >= 3:
+                    windows.append((f, e))
+                    edits.append(auto.accept_costs(d))
+        if not windows:
+            return None
+        ds = self.shapes.distances_of(windows, self._read)
+        edits = np.array(edits)
+        own = np.where(self._allowed & np.isfinite(ds), edits + WEIGHT * ds, np.inf)
+        fits = (own == own.min(axis=1, keepdims=True)) & (ds <= self.shapes.reject[None, :]) & np.isfinite(own)
+        alone = np.where(fits, own, np.inf)
+        score = alone.min(axis=1)
+        one = min((score[i] for i, (f, e) in enumerate(windows) if f in heads and e >= b - TRIM), default=np.inf)
+        firsts = [i for i, (f, e) in enumerate(windows) if f in heads and e in cuts]
+        lasts = {}
+        for i, (f, e) in enumerate(windows):
+            if f in cuts and e >= b - TRIM and (f not in lasts or score[i] < score[lasts[f]]):
+                lasts[f] = i
+        pairs = [(score[i] + score[lasts[windows[i][1]]], i, lasts[windows[i][1]]) for i in firsts if windows[i][1] in lasts]
+        if not pairs:
+            return None
+        two, i, j = min(pairs)
+        if not np.isfinite(one) or two >= one:
+            return None
+        k1, k2 = int(np.argmin(alone[i])), int(np.argmin(alone[j]))
+        return (*windows[i], k1, float(edits[i, k1])), (*windows[j], k2, float(edits[j, k2]))
 
     def _arc(self, a: int, b: int) -> np.ndarray:
         """Cumulative path length of the track's valid samples over tokens a..b, at each

@@ -174,6 +174,49 @@ def test_manifest_shape_and_track_fields(tmp_path):
         compile_library(load_library(tmp_path))
 
 
+@settings(max_examples=25, deadline=None)
+@given(st.integers(0, 2**31))
+def test_turn_features_ignore_how_the_controller_is_held(seed):
+    """The controller's turn is read relative to the window (``q(s) q̄⁻¹``): a grip offset
+    (every orientation times one constant rotation on the right) changes nothing, while a
+    different turn of the hand does."""
+    from doodle.core import quat
+
+    rng = np.random.default_rng(seed)
+    n = 40
+    path = np.cumsum(rng.normal(size=(n, 3)), axis=0)
+    axis = rng.normal(size=3)
+    spin = np.linspace(0, 2.0, n)[:, None] * axis / np.linalg.norm(axis)
+    q = np.column_stack([np.sin(np.linalg.norm(spin, axis=1) / 2)[:, None] * spin
+                         / np.maximum(np.linalg.norm(spin, axis=1, keepdims=True), 1e-12),
+                         np.cos(np.linalg.norm(spin, axis=1) / 2)])
+    grip = quat.normalise(rng.normal(size=(1, 4)))[0]
+    held = quat.multiply(q, np.broadcast_to(grip, q.shape))
+    a = shapes.features(*shapes.sample([(path, q)]), 0.5)
+    b = shapes.features(*shapes.sample([(path, held)]), 0.5)
+    assert a.shape == (shapes.POINTS - 1, 12) and np.allclose(a, b, atol=1e-9)
+    still = np.tile([0.0, 0.0, 0.0, 1.0], (n, 1))
+    assert not np.allclose(a, shapes.features(*shapes.sample([(path, still)]), 0.5), atol=1e-3)
+
+
+def test_two_gestures_back_to_back_are_read_as_two(tmp_path):
+    """Sub_U007's hook and uppercut performed without a pause between them: one motion,
+    which the uppercut's examples fit as a whole — but the hook and the uppercut fit its two
+    parts better than the uppercut fits it all, so both are read (in either order)."""
+    from bench.learning_protocol import stream
+    from doodle.input.loader import load
+    from grammar.recognizer import load_actions, recognize
+
+    gestures = ["hook_left", "hook_right", "golf_swing", "uppercut_left", "backflip"]
+    lib, files = _learn_all(tmp_path, gestures, "Sub_U007")
+    compiled = load_actions(lib, False)
+    pieces = [(g, load(files[g][k], convention="unity").select(["c0"])) for g, k in (("hook_left", 4), ("uppercut_left", 3))]
+    for order in (pieces, pieces[::-1]):
+        doodle, spans = stream(order, np.random.default_rng(0), False)
+        named = [s.action for s in recognize(doodle, compiled)["c0"][1] if s.action != "unknown"]
+        assert named == [g for g, _, _ in spans]
+
+
 def test_the_whole_motion_wins_over_a_part_nearer_another_gesture(tmp_path):
     """Sub_U007's held-out uppercuts: a part of each comes nearer the hook than the whole
     comes to the uppercut, and the Refiner once took that part for a hook. A window that
