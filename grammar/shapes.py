@@ -7,16 +7,18 @@ their own. A learned action therefore keeps the *shapes* of its examples as well
 example's path resampled to :data:`POINTS` points by arc length with the controller's
 orientation there (:func:`sample`; a two-handed action's tracks resampled together, along
 their summed arc length). Its features per step (:func:`features`) are the unit direction
-of the step and the controller's forward and up axes (weighted by a factor each library
+of the step and how the controller has turned (weighted by a factor each library
 chooses on its own examples, :func:`choose_turn`), in the room's frame — a performer faces
-the table, so left and right mean something, and how the hand is turned tells one
-person's uppercut from their hook (several people hold a controller each their own way). The shape distance of a performance to an
+the table, so left and right mean something, and how the hand turns tells one person's
+uppercut from their hook; the turn is read relative to the window, so however each person
+holds the controller, the same hand movement reads the same. The shape distance of a performance to an
 action is the smallest DTW cost between its features and an example's, per step. It ranks
 the actions whose expressions the Matcher found: ``edits +`` :data:`WEIGHT` ``× shape
 distance``; an action is rejected past a distance derived from its examples
 (:func:`reject_distances`). Of the windows around a segment, the one explaining the motion
 between the pauses best wins — the whole motion whenever it fits an action —, and a window
-leaving part of it out pays for that part at the action's rejection distance (:class:`Refiner`).
+leaving part of it out pays for that part at the action's rejection distance (:class:`Refiner`); a
+motion that two learned gestures fit better than one is read as both, back to back.
 
 DTW costs of one performance against every template are computed at once (one row
 recurrence vectorised over templates), about 0.2 ms for 33 templates of 31 steps.
@@ -537,14 +539,13 @@ class Refiner:
                 ends = [(lo, min(hi, motion[1])) for lo, hi in ends if lo <= motion[1]] + [(motion[1], motion[1])]
             two = self._two(motion, known) if motion is not None else None
             if two is not None:  # the motion is two gestures back to back
-                (f, c, k1, e1), (_, e, k2, e2) = two
-                if f < first:
-                    self._take_back(f)
-                return (self._spot_deferred(min(f, first), known) + self._emit(UNKNOWN, first, f, False, None)
-                        + self._emit(self.shapes.names[k1], f, c, e1 == 0.0, e1)
-                        + self._emit(self.shapes.names[k2], c, e, e2 == 0.0, e2)
-                        + self._emit(UNKNOWN, e, seg.stop, False, None))
+                return self._both(two, first, seg.stop, known)
             best = self._best(starts, ends, known, motion=motion)
+            if best is None and SPOT_TOKENS <= seg.stop - first <= SPOT_MAX:  # none fits around it: searched within
+                two = self._two((first, seg.stop), known, whole=False)
+                if two is not None:
+                    return self._both(two, first, seg.stop, known)
+                best = self._spot(first, seg.stop, known)
         else:
             return self._emit(seg.action, first, seg.stop, seg.exact, seg.distance)
         if best is None:
@@ -605,13 +606,24 @@ class Refiner:
             return None
         return (a, known) if closed and known > seg.first else "pending"
 
+    def _both(self, two, first: int, stop: int, known: int) -> list:
+        """Two gestures found back to back (:meth:`_two`) emitted for a segment ``first..stop``."""
+        from grammar.matcher import UNKNOWN
+
+        (f, c, k1, e1), (_, e, k2, e2) = two
+        if f < first:
+            self._take_back(f)
+        return (self._spot_deferred(min(f, first), known) + self._emit(UNKNOWN, first, f, False, None)
+                + self._emit(self.shapes.names[k1], f, c, e1 == 0.0, e1)
+                + self._emit(self.shapes.names[k2], c, e, e2 == 0.0, e2) + self._emit(UNKNOWN, e, stop, False, None))
+
     def _take_back(self, f: int) -> None:
         """Tokens from ``f`` on taken back from the pending unknown run."""
         pending = self._unknown
         self._unknown = None if f <= pending.first else replace(pending, stop=f, end=self.tokens[f - 1].end)
         self._done = f
 
-    def _two(self, motion, known: int):
+    def _two(self, motion, known: int, whole: bool = True):
         """A motion between pauses read as two learned gestures back to back — ``(first, cut,
         action, edits)`` and ``(cut, stop, action, edits)`` — when that explains it better than
         one action: the two windows' scores (``edits + WEIGHT × shape distance``, each the
@@ -654,7 +666,7 @@ class Refiner:
         if not pairs:
             return None
         two, i, j = min(pairs)
-        if not np.isfinite(one) or two >= one:
+        if not np.isfinite(two) or (whole and not np.isfinite(one)) or two >= one:
             return None
         k1, k2 = int(np.argmin(alone[i])), int(np.argmin(alone[j]))
         return (*windows[i], k1, float(edits[i, k1])), (*windows[j], k2, float(edits[j, k2]))
