@@ -380,6 +380,36 @@ EFFORT_SOURCES: dict[str, str] = {
     "Stroke Rate": "log(1 + strokes per second): speed peaks above 30 % of the largest, apart from "
                    "each other. Time (Sudden repeats quick strokes) and Weight (Strong phrases "
                    "accents; Fdili Alaoui et al. 2017).",
+    # per stroke (a speed peak between the speed minima around it, see _stroke_table), averaged
+    # over the strokes weighted by their kinetic energy ∫|v|² dt, so the movement's main strokes
+    # count and a wobble does not
+    "Stroke Duration": "log s of a stroke, from the speed minimum before its peak to the one after. "
+                       "Time: EMOTE sets Time by each stroke's duration (Chi et al. 2000); Sudden is "
+                       "brief, Sustained lingers (Laban 1947) — a walk's steps, a wave's swings alike, "
+                       "however far the body travels.",
+    "Stroke Rise": "log s from a stroke's start to its peak speed. Time: the impulsive onset of a "
+                   "Sudden stroke (EMOTE's inflection time t_i, Chi et al. 2000; thesis §4.3).",
+    "Stroke Peakedness": "log(peak |v| · T / L) of a stroke of duration T and length L: 1 for an even "
+                         "speed, 1.875 for a minimum-jerk stroke, more when the energy is packed in a "
+                         "peak. Weight: Strong concentrates kinetic energy (Samadani et al. 2013, Fdili "
+                         "Alaoui et al. 2017: Weight as peak kinetic energy), Light spreads it. Free of "
+                         "size and of tempo (T and L of the stroke itself).",
+    "Stroke Peak Accel": "log(max |a| · T / peak |v|) in a stroke: peak acceleration relative to what "
+                         "the stroke's speed and duration need. Weight: Strong exerts force in bursts "
+                         "(Bernstein et al. 2015: Strong = high peak acceleration; force = mass × "
+                         "acceleration); Light is buoyant, low acceleration for its speed (Laban & "
+                         "Lawrence 1947; Chi et al. 2000). Free of size and tempo.",
+    "Stroke Impact": "log(largest deceleration after the peak · T / peak |v|): how sharply a stroke "
+                     "stops. Weight: a Strong stroke ends in an impact, a sharp deceleration at the "
+                     "stroke's end (Laban 1947; Larboulette & Gibet 2015; EMOTE's overshoot for "
+                     "Strong, Chi et al. 2000); a Light one lands softly.",
+    "Stroke Jerk": "log(∫|j|² dt · T⁵ / L²) of a stroke: the dimensionless jerk (Hogan & Sternad 2009) "
+                   "— 720 for a minimum-jerk stroke. Weight: the impulsive changes of force of a "
+                   "Strong stroke (Bernstein et al. 2015; Larboulette & Gibet 2015, jerk as impact); "
+                   "Light is smooth. Free of size and tempo.",
+    "Stroke Brake Ratio": "log(largest deceleration / largest acceleration of the speed) in a stroke. "
+                          "Weight: Strong brakes harder than it starts (impact), Light settles "
+                          "(Laban & Lawrence 1947).",
 }
 """Each Effort feature and its justification. The sources:
 Laban & Lawrence (1947) Effort; Chi, Costa, Zhao & Badler (2000) "The EMOTE model for effort
@@ -416,15 +446,59 @@ def effort_signal(t: np.ndarray, p: np.ndarray) -> tuple[np.ndarray, np.ndarray,
     return grid, v, a, j, dt
 
 
-def _strokes(speed: np.ndarray) -> int:
-    """Speed peaks of at least STROKE_FLOOR of the largest that stand out by a prominence of
-    STROKE_DIP of it (a dip between strokes, not a wobble)."""
+def _stroke_peaks(speed: np.ndarray) -> np.ndarray:
+    """Indices of the speed peaks of at least STROKE_FLOOR of the largest that stand out by a
+    prominence of STROKE_DIP of it (a dip between strokes, not a wobble); at least the largest."""
     from doodle.core.peaks import find_peaks  # scipy.signal's, without its import
 
     top = float(speed.max())
     padded = np.concatenate([[0.0], speed, [0.0]])  # a movement starting or ending fast still peaks
     peaks, _ = find_peaks(padded, height=STROKE_FLOOR * top, prominence=STROKE_DIP * STROKE_FLOOR * top)
-    return max(len(peaks), 1)
+    peaks = np.clip(peaks - 1, 0, len(speed) - 1)
+    return peaks if len(peaks) else np.array([int(np.argmax(speed))])
+
+
+def _strokes(speed: np.ndarray) -> int:
+    """How many strokes (:func:`_stroke_peaks`)."""
+    return len(_stroke_peaks(speed))
+
+
+STROKE_REST = 0.1  # a first or last stroke starts / ends where the speed is under this share of its peak
+
+
+def _stroke_table(speed: np.ndarray, acc: np.ndarray, jerk: np.ndarray, dt: float) -> np.ndarray:
+    """Per stroke (rows), ``(energy, log T, log rise, log peakedness, log peak accel, log
+    impact, log jerk, log brake)`` — see the "Stroke …" entries of :data:`EFFORT_SOURCES`. A
+    stroke is a peak of :func:`_stroke_peaks` from the speed minimum before it (the segment's
+    start, or where the speed last rose past STROKE_REST of the peak) to the one after."""
+    n = len(speed)
+    peaks = _stroke_peaks(speed)
+    tangential = np.gradient(speed, dt) if n > 1 else np.zeros(n)
+    rows = []
+    eps = 1e-12
+    for i, k in enumerate(peaks):
+        if i == 0:
+            low = np.flatnonzero(speed[: k + 1] <= STROKE_REST * speed[k])
+            a = int(low[-1]) if len(low) else 0
+        else:
+            a = int(peaks[i - 1] + np.argmin(speed[peaks[i - 1]: k + 1]))
+        if i == len(peaks) - 1:
+            low = np.flatnonzero(speed[k:] <= STROKE_REST * speed[k])
+            b = int(k + low[0]) if len(low) else n - 1
+        else:
+            b = int(k + np.argmin(speed[k: peaks[i + 1] + 1]))
+        if b - a < 2:
+            continue
+        T, vp = (b - a) * dt, float(speed[k])
+        s = slice(a, b + 1)
+        length = max(float(np.sum(speed[s])) * dt, eps)
+        brake = max(float(-tangential[k: b + 1].min()), eps)
+        push = max(float(tangential[a: k + 1].max()), eps)
+        rows.append([float(np.sum(speed[s] ** 2)) * dt, math.log(T), math.log(max(k - a, 1) * dt),
+                     math.log(vp * T / length), math.log(float(acc[s].max()) * T / vp + eps),
+                     math.log(brake * T / vp), math.log(float(np.sum(jerk[s] ** 2)) * dt * T**5 / length**2 + eps),
+                     math.log(brake / push)])
+    return np.array(rows).reshape(-1, 8)
 
 
 def effort_features(t: np.ndarray, p: np.ndarray) -> np.ndarray:
@@ -486,4 +560,10 @@ def effort_features(t: np.ndarray, p: np.ndarray) -> np.ndarray:
         math.log(rms_a * active / rms_v + eps),
         math.log1p(_strokes(sp) / active),
     ]
+    table = _stroke_table(sp, ac, je, dt)
+    if len(table):
+        w = table[:, 0] / max(float(table[:, 0].sum()), 1e-300)
+        feats += list(w @ table[:, 1:])
+    else:
+        feats += [math.log(active), math.log(active), 0.0, 0.0, 0.0, 0.0, 0.0]
     return np.nan_to_num(np.array(feats, float), nan=0.0, posinf=50.0, neginf=-50.0)
