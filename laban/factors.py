@@ -199,19 +199,22 @@ def fit_factors(X: np.ndarray, yt: np.ndarray, yw: np.ndarray, groups: np.ndarra
     by temperature scaling on the chosen classifier's held-out logits over folds of whole
     groups (performers, clips) of every source. (Calibrating on the logits of each source
     held out instead — a classifier meeting a procedure it never saw — was measured worse
-    on the cross-procedure runs: expected calibration error of Weight 0.18 against 0.13,
-    with two sources the one pair of procedures it rests on is too few.)
-    Every source (the part of a group before ``/``) weighs the same. ``report``, if given,
-    receives what was chosen and every candidate's held-out score."""
+    on the cross-procedure runs during development: expected calibration error of Weight
+    0.18 against 0.13 — with two sources, the one pair of procedures it rests on is too
+    few.) Every source (the part of a group before ``/``) weighs the same; a row whose label
+    is 0 (the procedure did not give the path that Factor) is left out of that Factor's fit.
+    ``report``, if given, receives what was chosen and every candidate's held-out score."""
+    groups = np.asarray(groups)
     sources = _sources(groups)
-    kinds, counts = np.unique(sources, return_counts=True)
-    weights = 1.0 / counts[np.searchsorted(kinds, sources)]
     out = {}
-    for factor, y in (("time", yt), ("weight", yw)):
-        name, C, scores, _ = choose(X, y, weights, groups, factor, folds, seed)
-        full = fit_logistic(X, y, CANDIDATES[factor][name], weights, C)
-        logits = _held_out_logits(X, y, weights, _folds(groups, folds, seed, by_source=False),
-                                  CANDIDATES[factor][name], C)
+    for factor, y_all in (("time", yt), ("weight", yw)):
+        known = np.asarray(y_all) != 0  # 0: the procedure did not give this path that Factor
+        X_, y, g_ = X[known], np.asarray(y_all)[known], groups[known]
+        kinds, counts = np.unique(sources[known], return_counts=True)
+        w_ = (1.0 / counts[np.searchsorted(kinds, sources[known])])
+        name, C, scores, _ = choose(X_, y, w_, g_, factor, folds, seed)
+        full = fit_logistic(X_, y, CANDIDATES[factor][name], w_, C)
+        logits = _held_out_logits(X_, y, w_, _folds(g_, folds, seed, by_source=False), CANDIDATES[factor][name], C)
         out[factor] = Logistic(full.centre, full.scale, full.coef, full.bias, temperature(logits, y))
         if report is not None:
             report[factor] = {"features": name, "C": C, "held_out": "sources" if len(kinds) > 1 else "groups",
