@@ -393,12 +393,12 @@ EFFORT_SOURCES: dict[str, str] = {
     # per stroke (a speed peak between the speed minima around it, see _stroke_table), averaged
     # over the strokes weighted by their kinetic energy ∫|v|² dt, so the movement's main strokes
     # count and a wobble does not
-    "Stroke Duration": "log s of a stroke, from the speed minimum before its peak to the one after. "
-                       "Time: EMOTE sets Time by each stroke's duration (Chi et al. 2000); Sudden is "
-                       "brief, Sustained lingers (Laban 1947) — a walk's steps, a wave's swings alike, "
-                       "however far the body travels.",
-    "Stroke Rise": "log s from a stroke's start to its peak speed. Time: the impulsive onset of a "
-                   "Sudden stroke (EMOTE's inflection time t_i, Chi et al. 2000; thesis §4.3).",
+    "Stroke Duration": "log s a stroke (speed minimum to speed minimum) takes to cover the middle 80 % "
+                       "of its length. Time: EMOTE sets Time by each stroke's duration (Chi et al. "
+                       "2000); Sudden is brief, Sustained lingers (Laban 1947) — a walk's steps, a "
+                       "wave's swings alike, however far the body travels.",
+    "Stroke Rise": "log s a stroke takes from 10 % to 50 % of its length. Time: the impulsive onset of "
+                   "a Sudden stroke (EMOTE's inflection time t_i, Chi et al. 2000; thesis §4.3).",
     "Stroke Peakedness": "log(peak |v| · T / L) of a stroke of duration T and length L: 1 for an even "
                          "speed, 1.875 for a minimum-jerk stroke, more when the energy is packed in a "
                          "peak. Weight: Strong concentrates kinetic energy (Samadani et al. 2013, Fdili "
@@ -414,7 +414,7 @@ EFFORT_SOURCES: dict[str, str] = {
                      "stroke's end (Laban 1947; Larboulette & Gibet 2015; EMOTE's overshoot for "
                      "Strong, Chi et al. 2000); a Light one lands softly.",
     "Stroke Jerk": "log(∫|j|² dt · T⁵ / L²) of a stroke: the dimensionless jerk (Hogan & Sternad 2009) "
-                   "— 720 for a minimum-jerk stroke. Weight: the impulsive changes of force of a "
+                   "— 720 for a minimum-jerk stroke, less once low-passed. Weight: the impulsive changes of force of a "
                    "Strong stroke (Bernstein et al. 2015; Larboulette & Gibet 2015, jerk as impact); "
                    "Light is smooth. Free of size and tempo.",
     "Stroke Brake Ratio": "log(largest deceleration / largest acceleration of the speed) in a stroke. "
@@ -428,7 +428,19 @@ analysis of affective hand and arm movements", ACII; Bernstein, Shafir, Tsachor,
 Schuster (2015) "Multitask learning for Laban movement analysis", MOCO; Larboulette & Gibet
 (2015) "A review of computable expressive descriptors of human motion", MOCO; Fdili Alaoui,
 Françoise, Schiphorst, Studd & Bevilacqua (2017) "Seeing, sensing and recognizing Laban
-movement qualities", CHI."""
+movement qualities", CHI; Hogan & Sternad (2009) "Sensitivity of smoothness measures to
+movement duration, amplitude, and arrests", Journal of Motor Behavior 41(6).
+
+What the tests found when these were checked against the two real-motion procedures (the
+EMOTE-style timing and the stylisation operators, both this project's): the measures of
+energy concentration ("Stroke Peakedness", "Peak Energy Ratio", "Energy Spread", "Speed
+Variation") separate Strong from Light in both, while the force and impact measures ("Stroke
+Peak Accel", "Stroke Impact", "Stroke Jerk", "Impact", …) barely do (areas under the ROC
+curve 0.5–0.7) — both procedures make Strong by packing a stroke's energy into its peak (EMOTE
+by the time exponent, the operators by speed ∝ V^(α·L_w)), which energy concentration
+mirrors. The force measures are also the ones a tracker's absolute noise disturbs at a
+figurine's size. That Weight reads as energy concentration here is therefore partly the
+procedures' definition; motion capture of people performing Strong and Light may differ."""
 
 EFFORT_NAMES: tuple[str, ...] = tuple(EFFORT_SOURCES)
 
