@@ -431,7 +431,7 @@ Françoise, Schiphorst, Studd & Bevilacqua (2017) "Seeing, sensing and recognizi
 movement qualities", CHI; Hogan & Sternad (2009) "Sensitivity of smoothness measures to
 movement duration, amplitude, and arrests", Journal of Motor Behavior 41(6).
 
-What the tests found when these were checked against the two real-motion procedures (the
+What was measured when these were checked against the two real-motion procedures (the
 EMOTE-style timing and the stylisation operators, both this project's): the measures of
 energy concentration ("Stroke Peakedness", "Peak Energy Ratio", "Energy Spread", "Speed
 Variation") separate Strong from Light in both, while the force and impact measures ("Stroke
