@@ -64,7 +64,7 @@ def main() -> None:
 
 def cross_procedure() -> None:
     """``python -m bench.laban_effort``'s last table: see :mod:`doodle.app.effort_corpus`."""
-    from doodle.app.effort_corpus import MOCAP, cross_procedure as run, reliability, table
+    from doodle.app.effort_corpus import MOCAP, cross_procedure as run, proxy_table, reliability, styled_proxy, table
 
     if not MOCAP.is_dir():
         print(f"Cross-procedure Effort accuracy: motion capture not found under {MOCAP}")
@@ -75,6 +75,10 @@ def cross_procedure() -> None:
     rel = reliability(rep)
     print(f"  calibration (cross-procedure runs): expected calibration error Time {rel['time']['ece']:.3f}, "
           f"Weight {rel['weight']['ece']:.3f}  ({time.perf_counter() - start:.0f} s)")
+    for run in rep["runs"]:
+        print(f"  {run['name']}: chose Time {run['chosen']['time']}; Weight {run['chosen']['weight']}")
+    model = load()
+    print("\n".join(proxy_table(styled_proxy(model.factors, model.threshold, root=MOCAP))))
 
 
 def _real(model) -> None:

@@ -4,19 +4,28 @@ features (:func:`laban.features.effort_features` — size and rate free).
 Each classifier is ``P(+1 | x) = σ((w · z + b) / T)`` with ``z`` the features standardised
 by the training set's mean and deviation, ``w, b`` fitted by L2-regularised logistic
 regression (scikit-learn ``LogisticRegression``, balanced classes), and the temperature
-``T`` fitted afterwards on out-of-fold decisions — each training group (performer or
-neutral clip) scored by a classifier that did not see it — by minimising their negative
+``T`` fitted afterwards on held-out decisions — each group of performers or clips scored
+by a classifier that did not see it — by minimising their negative
 log-likelihood (temperature scaling, Guo, Pleiss, Sun & Weinberger 2017, "On calibration
-of modern neural networks", ICML). So a confidence of 0.8 is right about 80 % of the time
-on movements like the training ones, and a quality whose confidence is under the model's
-threshold is left neutral (abstention) rather than guessed.
+of modern neural networks", ICML): a confidence of 0.8 is right about 80 % of the time on
+movement like the training data's — on a procedure the model never saw, less reliably (see
+the reliability diagram of ``doodle laban eval``) — and a quality whose confidence is under
+the model's threshold is left neutral (abstention) rather than guessed.
 
-Each Factor reads only the features that mean it (their sources are in
-:data:`laban.features.EFFORT_SOURCES`), with strong regularisation: on effort applied by one
-procedure and tested on another, every extra feature let the classifier learn the training
-procedure's habits instead of the quality (measured: Time 0.65/0.81 with all features,
-0.81/0.85 with these four; Weight 0.70/0.69 against 0.71/0.85), and each source of training
-data (generator, each real-motion procedure) weighs the same in the fit.
+Each Factor reads one of a few candidate feature sets (:data:`CANDIDATES`), fixed in advance
+by what the Factor is (Time: durations and rates; Weight: the dimensionless shape of the speed
+curve — energy concentration, force and impact; sources in
+:data:`laban.features.EFFORT_SOURCES`). Which set, and how strong the L2 regularisation, is
+chosen on the training data alone (:func:`choose`): when it holds several sources (the
+generator, EMOTE-style timing, the stylisation operators) each source is held out in turn and
+scored by a classifier trained on the others — the training data's own cross-procedure test,
+so the choice favours what the procedures agree on rather than one procedure's habits; with a
+single source, folds of whole performers or clips. Each source weighs the same in the fit.
+No model chooses its features or regularisation on data it is then tested on (an earlier
+version picked its features by the cross-procedure test figures themselves). The candidate
+sets were written while the cross-procedure figures were in view, though, so those figures
+are not a blind estimate: :func:`doodle.app.effort_corpus.styled_proxy` (real people's styled
+motion, no procedure) is the check none of this was tuned on.
 
 Training presents every path at several sizes (×0.1–×10 of the recorded one, log-uniform)
 and tracking rates (30–144 Hz, jittered clock, absolute tracking noise): the features are
@@ -33,13 +42,34 @@ import numpy as np
 from laban.features import EFFORT_NAMES, effort_features
 from laban.procedures import Effortful, presented
 
-C = 0.05  # inverse L2 strength: strong, so no feature is leaned on beyond what all sources agree on
-FEATURES = {
-    # Time: how brief and how quick the movement's main stroke is, for its size
-    "time": ("Relative Peak Speed", "Peak Stroke Width", "Peak Rise Time", "Peak Fall Time"),
-    # Weight: energy concentrated in peaks (Strong) or spread evenly (Light), and a short, fast main stroke
-    "weight": ("Speed Variation", "Peak Energy Ratio", "Energy Spread", "Peak Stroke Width", "Relative Peak Speed"),
+# Candidate feature sets per Factor, fixed by what the Factor IS before any data is seen:
+# Time is duration and tempo (features in seconds or 1/s), Weight is how force is spent — the
+# shape of the speed curve, free of size AND of tempo (dimensionless), so that a Sudden or a
+# Sustained rendition of a Strong stroke reads equally Strong. Which set and which
+# regularisation a model uses is chosen on its own training data only (:func:`choose`).
+CANDIDATES: dict[str, dict[str, tuple[str, ...]]] = {
+    "time": {
+        "stroke timing": ("Stroke Duration", "Stroke Rise"),
+        "stroke and peak timing": ("Stroke Duration", "Stroke Rise", "Peak Stroke Width", "Peak Rise Time",
+                                   "Peak Fall Time"),
+        "timing and rates": ("Stroke Duration", "Stroke Rise", "Peak Stroke Width", "Peak Rise Time",
+                             "Peak Fall Time", "Speed Change Rate", "Jerk Rate", "Relative Peak Speed"),
+    },
+    "weight": {
+        "energy concentration": ("Stroke Peakedness",),
+        "energy concentration, all measures": ("Stroke Peakedness", "Peak Energy Ratio", "Energy Spread",
+                                               "Speed Variation"),
+        "force and impact": ("Stroke Peak Accel", "Stroke Impact", "Stroke Jerk", "Stroke Brake Ratio",
+                             "Peak Accel Ratio", "Peak Jerk Ratio", "Impact", "Stop Sharpness",
+                             "Accel Quantile Ratio"),
+        "energy, force and impact": ("Stroke Peakedness", "Peak Energy Ratio", "Energy Spread", "Speed Variation",
+                                     "Stroke Peak Accel", "Stroke Impact", "Stroke Jerk", "Stroke Brake Ratio",
+                                     "Peak Accel Ratio", "Peak Jerk Ratio", "Impact", "Stop Sharpness",
+                                     "Accel Quantile Ratio"),
+        "energy concentration and burst width": ("Stroke Peakedness", "Peak Stroke Width"),
+    },
 }
+CS = (0.01, 0.1, 1.0)  # inverse L2 strengths tried (the features are standardised)
 SCALES = (0.1, 10.0)  # training sizes, × the recorded path (log-uniform)
 RATE_RANGE = (30.0, 144.0)  # Hz, training tracking rates (uniform)
 
@@ -63,12 +93,13 @@ class Logistic:
         return 1.0 / (1.0 + np.exp(-np.clip(self.logit(X) / self.temperature, -700, 700)))
 
 
-def fit_logistic(X: np.ndarray, y: np.ndarray, factor: str, weights: np.ndarray | None = None) -> Logistic:
+def fit_logistic(X: np.ndarray, y: np.ndarray, names: tuple[str, ...], weights: np.ndarray | None = None,
+                 C: float = 0.1) -> Logistic:
     """The classifier of labels ``y`` ∈ {−1, +1} from rows ``X`` (all Effort features; only
-    ``FEATURES[factor]`` get a weight), temperature 1."""
+    the features ``names`` get a weight), temperature 1, classes balanced."""
     from sklearn.linear_model import LogisticRegression
 
-    cols = [EFFORT_NAMES.index(n) for n in FEATURES[factor]]
+    cols = [EFFORT_NAMES.index(n) for n in names]
     centre, scale = X.mean(axis=0), np.maximum(X.std(axis=0), 1e-9)
     w = np.ones(len(y)) if weights is None else np.asarray(weights, float)
     for label in (-1, 1):  # balanced classes, on top of the sample weights
@@ -108,28 +139,86 @@ def features(items: list[Effortful], rng: np.random.Generator, copies: int = 2,
     return np.array(rows), np.array(yt), np.array(yw), np.array(groups)
 
 
-def fit_factors(X: np.ndarray, yt: np.ndarray, yw: np.ndarray, groups: np.ndarray, folds: int = 5,
-                seed: int = 0) -> dict[str, Logistic]:
-    """Time and Weight classifiers on feature rows, each calibrated on out-of-fold logits
-    (folds of whole groups); every source (the part of a group before ``/``) weighs the same."""
-    sources = np.array([g.split("/", 1)[0] for g in groups])
-    kinds, counts = np.unique(sources, return_counts=True)
-    weights = 1.0 / counts[np.searchsorted(kinds, sources)]
+def _sources(groups: np.ndarray) -> np.ndarray:
+    return np.array([g.split("/", 1)[0] for g in groups])
+
+
+def _folds(groups: np.ndarray, folds: int, seed: int, by_source: bool = True) -> np.ndarray:
+    """Held-out parts: one per source (generator, each real-motion procedure) when there are
+    several and ``by_source`` — each scored by a classifier that never saw that source —
+    else ``folds`` folds of whole groups (performers, clips)."""
+    sources = _sources(groups)
+    kinds = np.unique(sources)
+    if len(kinds) > 1 and by_source:
+        return np.searchsorted(kinds, sources)
     names = np.unique(groups)
     order = np.random.default_rng(seed).permutation(len(names))
     fold_of = dict(zip(names[order], np.arange(len(names)) % folds))
-    fold = np.array([fold_of[g] for g in groups])
+    return np.array([fold_of[g] for g in groups])
+
+
+def _held_out_logits(X, y, weights, fold, names, C) -> np.ndarray:
+    logits = np.zeros(len(y))
+    for k in np.unique(fold):
+        test = fold == k
+        if len(np.unique(y[~test])) == 2:
+            logits[test] = fit_logistic(X[~test], y[~test], names, weights[~test], C).logit(X[test])
+    return logits
+
+
+def _balanced(logits: np.ndarray, y: np.ndarray, fold: np.ndarray) -> float:
+    """Balanced accuracy per held-out part, averaged over the parts."""
+    pred = np.where(logits >= 0, 1, -1)
+    parts = [np.mean([np.mean(pred[(fold == k) & (y == c)] == c) for c in (-1, 1) if ((fold == k) & (y == c)).any()])
+             for k in np.unique(fold)]
+    return float(np.mean(parts))
+
+
+def choose(X: np.ndarray, y: np.ndarray, weights: np.ndarray, groups: np.ndarray, factor: str, folds: int = 5,
+           seed: int = 0) -> tuple[str, float, dict, np.ndarray]:
+    """The candidate feature set (:data:`CANDIDATES`) and L2 strength (:data:`CS`) whose
+    classifiers do best on held-out parts of the TRAINING data (:func:`_folds`: with several
+    sources, each source held out in turn — the training data's own cross-procedure test);
+    returns ``(set name, C, every candidate's score, the winner's held-out logits)``."""
+    fold = _folds(groups, folds, seed)
+    scores, best = {}, None
+    for name, feats in CANDIDATES[factor].items():
+        for C in CS:
+            logits = _held_out_logits(X, y, weights, fold, feats, C)
+            s = _balanced(logits, y, fold)
+            scores[f"{name}, C={C:g}"] = round(s, 4)
+            if best is None or s > best[0] + 1e-9:
+                best = (s, name, C, logits)
+    return best[1], best[2], scores, best[3]
+
+
+def fit_factors(X: np.ndarray, yt: np.ndarray, yw: np.ndarray, groups: np.ndarray, folds: int = 5,
+                seed: int = 0, report: dict | None = None) -> dict[str, Logistic]:
+    """Time and Weight classifiers on feature rows: each Factor's feature set and L2 strength
+    chosen by :func:`choose` on these rows alone, then fitted on all of them and calibrated
+    by temperature scaling on the chosen classifier's held-out logits over folds of whole
+    groups (performers, clips) of every source. (Calibrating on the logits of each source
+    held out instead — a classifier meeting a procedure it never saw — was measured worse
+    on the cross-procedure runs during development: expected calibration error of Weight
+    0.18 against 0.13 — with two sources, the one pair of procedures it rests on is too
+    few.) Every source (the part of a group before ``/``) weighs the same; a row whose label
+    is 0 (the procedure did not give the path that Factor) is left out of that Factor's fit.
+    ``report``, if given, receives what was chosen and every candidate's held-out score."""
+    groups = np.asarray(groups)
+    sources = _sources(groups)
     out = {}
-    for factor, y in (("time", yt), ("weight", yw)):
-        logits = np.empty(len(y))
-        for k in range(folds):
-            test = fold == k
-            if test.any() and len(np.unique(y[~test])) == 2:
-                logits[test] = fit_logistic(X[~test], y[~test], factor, weights[~test]).logit(X[test])
-            else:
-                logits[test] = 0.0
-        full = fit_logistic(X, y, factor, weights)
+    for factor, y_all in (("time", yt), ("weight", yw)):
+        known = np.asarray(y_all) != 0  # 0: the procedure did not give this path that Factor
+        X_, y, g_ = X[known], np.asarray(y_all)[known], groups[known]
+        kinds, counts = np.unique(sources[known], return_counts=True)
+        w_ = (1.0 / counts[np.searchsorted(kinds, sources[known])])
+        name, C, scores, _ = choose(X_, y, w_, g_, factor, folds, seed)
+        full = fit_logistic(X_, y, CANDIDATES[factor][name], w_, C)
+        logits = _held_out_logits(X_, y, w_, _folds(g_, folds, seed, by_source=False), CANDIDATES[factor][name], C)
         out[factor] = Logistic(full.centre, full.scale, full.coef, full.bias, temperature(logits, y))
+        if report is not None:
+            report[factor] = {"features": name, "C": C, "held_out": "sources" if len(kinds) > 1 else "groups",
+                              "scores": scores, "temperature": out[factor].temperature}
     return out
 
 

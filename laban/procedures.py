@@ -53,8 +53,9 @@ JITTER = 0.1  # sample clock jitter, as a share of the period
 @dataclass(frozen=True, eq=False)
 class Effortful:
     """One effort-labelled path: samples, Time (+1 Sudden / −1 Sustained) and Weight (+1
-    Strong / −1 Light), where it came from (``source``: generator, emote, stylize) and a group
-    (the performer or the neutral clip) for held-out splits."""
+    Strong / −1 Light) — 0 where the procedure did not give the path that Factor —, where it
+    came from (``source``: generator, emote, stylize), a group (the performer or the neutral
+    clip) for held-out splits, and which path of the clip it is (``role``)."""
 
     t: np.ndarray
     p: np.ndarray
@@ -63,6 +64,7 @@ class Effortful:
     weight: int
     source: str
     group: str
+    role: str = ""
 
 
 def _bell(x: np.ndarray) -> np.ndarray:

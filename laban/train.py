@@ -79,11 +79,12 @@ def effortful(curves: list[Labelled], source: str = "generator") -> list[Effortf
     return [Effortful(c.t, c.p, c.q, DRIVES[c.drive][1], DRIVES[c.drive][2], source, c.group) for c in curves]
 
 
-def train_factors(items: list[Effortful], copies: int = 2, seed: int = 0) -> dict:
+def train_factors(items: list[Effortful], copies: int = 2, seed: int = 0, report: dict | None = None) -> dict:
     """The calibrated Time and Weight classifiers (:mod:`laban.factors`) of effort-labelled
-    paths, each presented ``copies`` times at a random size and rate."""
+    paths, each presented ``copies`` times at a random size and rate; ``report`` receives
+    the feature sets and regularisation chosen (:func:`laban.factors.fit_factors`)."""
     X, yt, yw, groups = factor_models.features(items, np.random.default_rng([seed, 21]), copies)
-    return factor_models.fit_factors(X, yt, yw, groups, seed=seed)
+    return factor_models.fit_factors(X, yt, yw, groups, seed=seed, report=report)
 
 
 def train(curves: list[Labelled], held_out: list[Labelled] | None = None, sets=SETS, points: int = POINTS,
@@ -118,10 +119,11 @@ def train(curves: list[Labelled], held_out: list[Labelled] | None = None, sets=S
     element_hmms = fit_set(elements, element_seqs, element_labels, iterations,
                            lambda i, n: step("element HMMs", i, n))
     temperature = calibrate(drive_hmms, held_out, sets, points) if held_out else 1.0
-    decided = train_factors(effortful(curves) + list(extra), copies, seed)
+    chosen: dict = {}
+    decided = train_factors(effortful(curves) + list(extra), copies, seed, chosen)
     step("Time and Weight", 1, 1)
-    return EffortModel(bayes, drive_hmms, element_hmms, tuple(sets), points, temperature, threshold, info or {},
-                       decided)
+    return EffortModel(bayes, drive_hmms, element_hmms, tuple(sets), points, temperature, threshold,
+                       {**(info or {}), "time_weight": chosen}, decided)
 
 
 def calibrate(hmms: HMMSet, curves: list[Labelled], sets=SETS, points: int = POINTS) -> float:

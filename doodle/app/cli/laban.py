@@ -173,6 +173,7 @@ def cmd_eval(args) -> int:
     cross = _cross(args)
     if cross is not None:
         report["cross_procedure"] = cross
+        report["styled_proxy"] = _proxy(args, model)
     pictures = []
     with atomic_files() as staged:  # the pictures and report.json together, or none
         for method, r in report["methods"].items():
@@ -203,6 +204,10 @@ def cmd_eval(args) -> int:
         rel = cross["reliability"]
         print(f"  calibration (cross-procedure runs): expected calibration error Time {rel['time']['ece']:.3f}, "
               f"Weight {rel['weight']['ece']:.3f}")
+        if report["styled_proxy"]["clips"]:
+            from doodle.app.effort_corpus import proxy_table
+
+            print("\n".join(proxy_table(report["styled_proxy"])))
     print(f"{out / 'report.json'}; confusion matrices: {', '.join(pictures)}")
     return 0
 
@@ -228,6 +233,15 @@ def _cross(args) -> dict | None:
             for key in ("p_sudden", "p_strong", "truth_time", "truth_weight"):
                 cell.pop(key)
     return rep
+
+
+def _proxy(args, model) -> dict:
+    """The styled-clip proxy (:func:`doodle.app.effort_corpus.styled_proxy`) of the model
+    evaluated, on the clips beside the neutral ones."""
+    from doodle.app.effort_corpus import MOCAP, styled_proxy
+
+    folder = Path(args.mocap) if args.mocap else MOCAP
+    return styled_proxy(model.factors, model.threshold, root=folder)
 
 
 def cmd_classify(args) -> int:
