@@ -57,9 +57,7 @@ def two_bone_ik(motion: Motion, hip: int, knee: int, ankle: int, target: np.ndar
     # straight throughout bends about the hip's own x axis
     bent = np.linalg.norm(axis0, axis=1) > 0.15 * lab * lcb
     if bent.any():
-        idx = np.flatnonzero(bent)
-        nearest = idx[np.abs(idx[None, :] - np.arange(len(bent))[:, None]).argmin(axis=1)]
-        axis0 = axis0[nearest]  # a bent frame is its own nearest
+        axis0 = axis0[nearest_true(bent)]  # a bent frame is its own nearest
     else:
         axis0 = quat.rotate(world[:, hip], np.tile([1.0, 0.0, 0.0], (len(axis0), 1)))
     axis0 = _unit(axis0)
@@ -83,6 +81,18 @@ def two_bone_ik(motion: Motion, hip: int, knee: int, ankle: int, target: np.ndar
     new_knee_world = quat.multiply(new_hip_world, rots[:, knee])
     rots[:, ankle] = quat.multiply(quat.conjugate(new_knee_world), world[:, ankle])
     return replace(motion, rotations=rots)
+
+
+def nearest_true(mask: np.ndarray) -> np.ndarray:
+    """(F,) for each frame the index of the nearest frame where ``mask`` (F,) bool, not
+    empty, is true (the earlier one on a tie): two neighbours found by ``searchsorted``, so
+    the cost stays constant per frame at any length."""
+    idx = np.flatnonzero(mask)
+    frames = np.arange(len(mask))
+    right = np.minimum(np.searchsorted(idx, frames), len(idx) - 1)
+    left = np.maximum(right - 1, 0)
+    take_left = np.abs(frames - idx[left]) <= np.abs(idx[right] - frames)
+    return np.where(take_left, idx[left], idx[right])
 
 
 def _intervals(mask: np.ndarray) -> list[tuple[int, int]]:

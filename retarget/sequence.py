@@ -286,12 +286,17 @@ def _blend_weights(placed: list[Placed], times: np.ndarray, blend: float):
     for k, pl in enumerate(placed):
         lo = pl.span.t0 - (blend / 2 if k > 0 else 0.0)
         hi = pl.span.t1 + (blend / 2 if k < len(placed) - 1 else 0.0)
-        mask = (times >= lo - 1e-9) & (times <= hi + 1e-9)
-        if k == 0:
-            mask |= times < pl.span.t0
-        if k == len(placed) - 1:
-            mask |= times > pl.span.t1
-        idx = np.flatnonzero(mask)
+        first = int(np.searchsorted(times, lo - 1e-9, side="left"))  # times sorted: a span, not a mask
+        stop = int(np.searchsorted(times, hi + 1e-9, side="right"))
+        if k == 0:  # ... and every frame before the first span
+            before = int(np.searchsorted(times, pl.span.t0, side="left"))
+            if before > 0:
+                first, stop = 0, max(stop, before)
+        if k == len(placed) - 1:  # ... and every frame after the last
+            after = int(np.searchsorted(times, pl.span.t1, side="right"))
+            if after < len(times):
+                first, stop = min(first, after), len(times)
+        idx = np.arange(first, max(stop, first))
         if len(idx) == 0:
             continue
         w = np.ones(len(idx))

@@ -290,7 +290,7 @@ def animate(track, tokens, segments, choices, times, skeleton, rest, scale, terr
         if span.cyclic:
             cycles = max((span.t1 - span.t0) / clip.motion.duration, 1.0)
             if travels and not span.in_place and clip.cycle_length:
-                driven = np.zeros(len(times))  # by the distance along the path, once it is laid
+                driven = np.zeros(1)  # by the distance along the path, once it is laid
         by_hand = retime == "gesture" or (style == "preferred" and choice.style != (0.0, 0.0))
         gesture = gesture_timing(track, span) if by_hand and not span.cyclic else None
         pieces.append(Placed(span, clip.motion, clip.roles["pelvis"], cycles, times, driven, travels,
@@ -312,8 +312,7 @@ def animate(track, tokens, segments, choices, times, skeleton, rest, scale, terr
     step = np.linalg.norm(np.diff(frame_path[:, [0, 2]], axis=0), axis=1)
     for k, pc in enumerate(pieces):
         if pc.progress is not None:
-            inside = (times[1:] > pc.span.t0) & (times[1:] <= pc.span.t1)
-            progress = np.concatenate([[0.0], np.cumsum(np.where(inside, step, 0.0))])
+            window, progress = walk_progress(times, step, pc.span.t0, pc.span.t1)
             stride = stride_scale(pc.motion, pc.pelvis, progress[-1] / max(pc.span.t1 - pc.span.t0, 1e-9))
             phase = 0.0
             if k > 0 and pieces[k - 1].progress is None:  # entered from a stand or an action
@@ -322,7 +321,7 @@ def animate(track, tokens, segments, choices, times, skeleton, rest, scale, terr
                 phase = entry_phase(before.motion, before.pelvis,
                                     [choices[k - 1].clip.roles[f] for f in ("left_foot", "right_foot")],
                                     at if before.cycles == 0 else 0.0, pc.motion, pc.pelvis, feet)
-            pieces[k] = replace(pc, progress=progress / stride, phase=phase)  # longer strides, faster steps
+            pieces[k] = replace(pc, times=window, progress=progress / stride, phase=phase)  # longer strides, faster steps
     motion, transitions = sequence(pieces, times, frame_path[:, [0, 2]], frame_heading, skeleton, fps,
                                    ground_y=frame_path[:, 1])
     feet = [rest.roles["left_foot"], rest.roles["right_foot"]]
@@ -340,6 +339,18 @@ def animate(track, tokens, segments, choices, times, skeleton, rest, scale, terr
                      transitions=transitions, clips=used, roles=rest.roles, terrain=terrain, frame_ranges=ranges,
                      projected=projected, styles=[c.style for c in choices], efforts=[c.effort for c in choices],
                      sample_times=track.t, sole=sole)
+
+
+def walk_progress(times: np.ndarray, step: np.ndarray, t0: float, t1: float) -> tuple[np.ndarray, np.ndarray]:
+    """The distance (m) travelled along the path from ``t0`` to each output time (``step``:
+    the path's length between each two frames, counted where the later frame is in
+    ``(t0, t1]``), over only the frames around the span: (times, distances), 0 at the
+    first and the whole walk at the last, as constant outside as :func:`numpy.interp` keeps
+    them — the same values as the whole timeline's running sum, in an array the span's size."""
+    lo = max(int(np.searchsorted(times, t0, side="right")) - 1, 0)  # the last frame at or before t0
+    hi = min(int(np.searchsorted(times, t1, side="right")), len(times) - 1)  # the first after t1
+    inside = (times[lo + 1 : hi + 1] > t0) & (times[lo + 1 : hi + 1] <= t1)
+    return times[lo : hi + 1], np.concatenate([[0.0], np.cumsum(np.where(inside, step[lo:hi], 0.0))])
 
 
 def _standing(rest, feet: list[int]) -> tuple[list[float], float]:
@@ -804,9 +815,11 @@ def quality(result: Animation) -> dict:
     deviation = float(np.mean(np.linalg.norm(pelvis[:, [0, 2]] - result.path[:, [0, 2]], axis=1)))
     acc = np.linalg.norm(np.diff(positions, n=2, axis=0), axis=2).max(axis=1) / motion.frame_time ** 2
     times = np.arange(motion.frames) * motion.frame_time
+    inner = times[1:-1]
     near = np.zeros(len(acc), dtype=bool)
-    for b in result.transitions:
-        near |= np.abs(times[1:-1] - b) <= 0.15
+    for b in result.transitions:  # only the frames around each transition looked at
+        lo, hi = np.searchsorted(inner, [b - 0.2, b + 0.2])
+        near[lo:hi] |= np.abs(inner[lo:hi] - b) <= 0.15
     smooth = float(acc[near].max() / max(acc[~near].max(), 1e-9)) if near.any() and (~near).any() else None
     return {"ground_penetration_m": round(max(0.0, -lowest), 4),
             "root_deviation_m": round(deviation, 4),

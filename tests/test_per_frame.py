@@ -1,0 +1,68 @@
+"""Per-frame work that stays constant per frame: the span and searchsorted forms of
+whole-timeline loops give what the plain whole-array formulas give, on small inputs."""
+
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+from doodle.app.pipeline import walk_progress
+from retarget.feet import nearest_true
+from retarget.sequence import _blend_weights
+
+
+def _nearest_plain(mask):
+    idx = np.flatnonzero(mask)
+    return idx[np.abs(idx[None, :] - np.arange(len(mask))[:, None]).argmin(axis=1)]
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_nearest_true_is_the_plain_nearest_with_the_earlier_on_a_tie(seed):
+    rng = np.random.default_rng(seed)
+    for n in (1, 2, 5, 17, 60):
+        mask = rng.random(n) < rng.uniform(0.05, 0.9)
+        if not mask.any():
+            mask[rng.integers(n)] = True
+        assert np.array_equal(nearest_true(mask), _nearest_plain(mask))
+    tie = np.array([True, False, True, False, False, False, True])
+    assert nearest_true(tie).tolist() == [0, 0, 2, 2, 2, 6, 6]
+
+
+def _progress_plain(times, step, t0, t1):
+    inside = (times[1:] > t0) & (times[1:] <= t1)
+    return np.concatenate([[0.0], np.cumsum(np.where(inside, step, 0.0))])
+
+
+@pytest.mark.parametrize("t0, t1", [(0.0, 1.0), (-0.5, 0.4), (0.33, 0.71), (0.5, 2.5), (0.1, 0.1), (1.2, 3.0)])
+def test_walk_progress_over_its_span_interpolates_as_the_whole_timeline(t0, t1):
+    times = np.arange(31) / 30.0 * 1.5
+    step = np.random.default_rng(1).uniform(0.0, 0.1, len(times) - 1)
+    whole = _progress_plain(times, step, t0, t1)
+    window, progress = walk_progress(times, step, t0, t1)
+    assert len(window) == len(progress) <= len(times)
+    probe = np.concatenate([times, np.linspace(-1.0, 3.0, 97)])
+    assert np.array_equal(np.interp(probe, window, progress), np.interp(probe, times, whole))
+    assert progress[-1] == whole[-1]
+
+
+def _blend_plain(placed, times, blend):
+    out = []
+    for k, pl in enumerate(placed):
+        lo = pl.span.t0 - (blend / 2 if k > 0 else 0.0)
+        hi = pl.span.t1 + (blend / 2 if k < len(placed) - 1 else 0.0)
+        mask = (times >= lo - 1e-9) & (times <= hi + 1e-9)
+        if k == 0:
+            mask |= times < pl.span.t0
+        if k == len(placed) - 1:
+            mask |= times > pl.span.t1
+        out.append(np.flatnonzero(mask))
+    return out
+
+
+@pytest.mark.parametrize("bounds", [[0.0, 0.4, 0.9, 1.5], [0.25, 0.5, 1.0], [-0.2, 0.7, 2.0], [0.3, 0.3, 0.8, 0.8]])
+def test_blend_frames_found_by_search_are_the_masks_frames(bounds):
+    times = np.arange(46) / 30.0
+    placed = [SimpleNamespace(span=SimpleNamespace(t0=a, t1=b)) for a, b in zip(bounds, bounds[1:])]
+    found = {id(pl): idx for pl, idx, _ in _blend_weights(placed, times, 0.2)}
+    for pl, idx in zip(placed, _blend_plain(placed, times, 0.2)):
+        assert np.array_equal(found.get(id(pl), np.zeros(0, dtype=int)), idx)
