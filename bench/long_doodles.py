@@ -1,10 +1,11 @@
 """Long doodles: does per-frame work stay constant per frame at any length?
 
-Three doodles made in a temporary folder by repeating the demo's strokes
-(examples/make_demo.py, 8.6 s) with :mod:`doodle.synth.strokes` (seed 7, 90 Hz): 7 times
-(62.6 s), 70 times (10 min) and 420 times (1 h). Each is compiled through the command line,
-``doodle compile FILE -o DIR``, in a fresh process with a warm library cache (one untimed
-compile of the demo fills it) and BLAS pinned to one thread. For each: the wall-clock time
+Three doodles made in a temporary folder with :mod:`doodle.synth.strokes` (seed 7, 90 Hz):
+blocks of 8.6 s, the demo's strokes (examples/make_demo.py) and the same the other way
+(side-step right, walk back, jump on the spot, walk back, stomp) in turn, so the figurine
+stays in the tracked space — 7 blocks (about 60 s), 70 (10 min) and 420 (1 h). Each is compiled through the command line,
+``doodle compile FILE -o DIR``, in a fresh process with a warm library cache and Python's
+bytecode written (one untimed compile of the demo fills both) and BLAS pinned to one thread. For each: the wall-clock time
 (median of ``--runs`` processes for the 60 s doodle, one process for the longer ones unless
 ``--runs-long`` says otherwise), the time per second of doodle and its ratio to the 60 s
 doodle's, and the peak resident memory of the child (``os.wait4``'s ``ru_maxrss``).
@@ -44,23 +45,43 @@ TARGET_1H_S = 30.0
 TARGET_1H_MB = 400.0
 
 
+def back_strokes():
+    """The demo's strokes the other way (8.6 s): side-steps right, walks back, jumps on the
+    spot, walks back, stomps — so a long doodle made of both comes back where it started
+    instead of walking out of the tracked space (±100 m)."""
+    from doodle.synth.strokes import stroke
+
+    return [stroke("T_STILL", 0.8), stroke("T_N_X", 1.2, 0.12), stroke("T_STILL", 0.5),
+            stroke("T_N_Z", 1.5, 0.18), stroke("T_STILL", 0.5), stroke("T_Y", 0.5, 0.08),
+            stroke("T_N_Y", 0.5, 0.08), stroke("T_STILL", 0.5), stroke("T_N_Z", 1.2, 0.14),
+            stroke("T_STILL", 0.5), stroke("T_Y", 0.3, 0.06), stroke("T_N_Y", 0.25, 0.06), stroke("T_STILL", 0.8)]
+
+
 def make_doodle(path: Path, repeats: int, seed: int = 7) -> tuple[Path, float]:
-    """The demo's strokes performed ``repeats`` times, written to ``path``; (path, seconds)."""
+    """The demo's strokes and :func:`back_strokes` in turn, ``repeats`` blocks of 8.6 s,
+    written to ``path``; (path, seconds)."""
     spec = importlib.util.spec_from_file_location("make_demo", ROOT / "examples" / "make_demo.py")
     make_demo = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(make_demo)
     from doodle.input.fileformat import write_doodle
     from doodle.synth.strokes import synth_doodle
 
-    doodle = synth_doodle({"c0": make_demo.STROKES * repeats}, rate=90.0, seed=seed, device="vive-controller")
+    blocks = [make_demo.STROKES, back_strokes()]
+    strokes = [s for k in range(repeats) for s in blocks[k % 2]]
+    doodle = synth_doodle({"c0": strokes}, rate=90.0, seed=seed, device="vive-controller")
     write_doodle(path, doodle, convention="openvr")
     return path, float(doodle.t[-1] - doodle.t[0])
 
 
-def _env(cache: Path) -> dict:
+def _env(cache: Path, bytecode: Path) -> dict:
+    """The children's environment: BLAS on one thread, the library cache in ``cache``,
+    Python's bytecode written to and read from ``bytecode`` (as an installed program has it,
+    even where the shell sets ``PYTHONDONTWRITEBYTECODE``)."""
     env = dict(os.environ, OPENBLAS_NUM_THREADS="1", OMP_NUM_THREADS="1", MKL_NUM_THREADS="1")
     env["PYTHONPATH"] = os.pathsep.join([str(ROOT)] + [p for p in env.get("PYTHONPATH", "").split(os.pathsep) if p])
     env.pop("DOODLE_NO_CACHE", None)
+    env.pop("PYTHONDONTWRITEBYTECODE", None)
+    env["PYTHONPYCACHEPREFIX"] = str(bytecode)
     env["DOODLE_CACHE"] = str(cache)
     return env
 
@@ -125,8 +146,8 @@ def main(argv: list[str] | None = None) -> None:
     print("Long doodles compiled through the CLI (fresh processes, warm library cache, BLAS on one thread)")
     with tempfile.TemporaryDirectory(prefix="doodle-long-") as tmp:
         tmp = Path(tmp)
-        env = _env(tmp / "cache")
-        run_child(cli + [str(DEMO), "-o", str(tmp / "demo")], env)  # cache filled, untimed
+        env = _env(tmp / "cache", tmp / "bytecode")
+        run_child(cli + [str(DEMO), "-o", str(tmp / "demo")], env)  # caches and bytecode filled, untimed
         startup = statistics.median(run_child([py, "-c", "import numpy"], env)[0] for _ in range(3))
         rows = {}
         for name in sizes:
