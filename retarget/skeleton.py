@@ -12,8 +12,9 @@ are quaternions. World frame: right-handed, +y up.
 
 from __future__ import annotations
 
+import weakref
 from dataclasses import dataclass, field, replace
-from functools import lru_cache
+from functools import lru_cache, wraps
 
 import numpy as np
 from scipy.spatial.transform import Rotation
@@ -90,6 +91,30 @@ class Motion:
     def slice(self, start: int, stop: int) -> "Motion":
         """Frames ``[start, stop)``."""
         return replace(self, translations=self.translations[start:stop], rotations=self.rotations[start:stop])
+
+
+def per_motion(fn):
+    """``fn(motion, *args)`` worked out once per motion and arguments and kept for as long as
+    the motion lives (a :class:`weakref.WeakKeyDictionary`; motions are never changed in
+    place, so it stays true). For small results read in several passes over a compile's
+    clips (a clip's travel curve, its joints' speeds), where a recency cache of the clips'
+    forward kinematics would be long gone by the next pass. Arrays come back read-only."""
+    memo: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+    @wraps(fn)
+    def kept(motion: "Motion", *args):
+        known = memo.get(motion)
+        if known is None:
+            known = memo[motion] = {}
+        if args not in known:
+            out = fn(motion, *args)
+            if isinstance(out, np.ndarray):
+                out.flags.writeable = False
+            known[args] = out
+        return known[args]
+
+    kept.cache_clear = memo.clear
+    return kept
 
 
 FK_CACHED = 20_000  # joint-frames: motions up to this size (a clip: ~2,000) keep their forward kinematics

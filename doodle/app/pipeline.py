@@ -282,9 +282,9 @@ def animate(track, tokens, segments, choices, times, skeleton, rest, scale, terr
     from retarget.timing import flight_times, in_flight, make_room, speed_limit
     from retarget.trajectory import world_path
 
-    placed = [(*_span(seg, track, c), c) for seg, c in zip(segments, choices)]
-    pieces = []
-    for span, travels, choice in placed:
+    pieces, points, known = [], {}, {}
+    for seg, choice in zip(segments, choices):  # one pass per clip while its forward kinematics is fresh
+        span, travels = _span(seg, track, choice)
         clip = choice.clip
         cycles, driven = 0.0, None
         if span.cyclic:
@@ -295,7 +295,11 @@ def animate(track, tokens, segments, choices, times, skeleton, rest, scale, terr
         gesture = gesture_timing(track, span) if by_hand and not span.cyclic else None
         pieces.append(Placed(span, clip.motion, clip.roles["pelvis"], cycles, times, driven, travels,
                              gesture=gesture, contacts=clip.contacts))
-    pieces = _transition_points(pieces, [c.clip for c in choices])
+        _prime(pieces[-1], clip)
+        if len(pieces) > 1:
+            points[len(pieces) - 2] = _transition_point(pieces[-2], pieces[-1], choices[len(pieces) - 2].clip, clip,
+                                                         known)
+    pieces = _transition_points(pieces, [c.clip for c in choices], points, known)
     limits = [speed_limit(pc, _jump_travel(pc.span, track, scale)) for pc in pieces]
     pieces = make_room(pieces, track.t, limits, [c.clip.stages for c in choices])
     pieces = [replace(pc, pace=paced(pc.motion, pc.clip_in, pc.clip_out, pc.span.t1 - pc.span.t0, limit,
@@ -754,17 +758,51 @@ def check_edits(path, qualities: dict, segments: dict) -> None:
             have = f"segments 0–{count - 1}" if count > 1 else ("segment 0" if count else "no segments")
             raise DoodleError(f"{entry}: track {track} has {have} (see report.json's 'index')")
 
-def _transition_points(pieces: list, clips: list) -> list:
-    """Clip ranges between transition points (§5.3.1) for neighbouring one-shot clips."""
+def _prime(piece, clip) -> None:
+    """What later passes over the pieces read of a clip, worked out now, while its forward
+    kinematics is still in the recency cache (each is kept as long as the clip's motion):
+    a one-shot's joint speeds (pacing, room), a distance-driven cycle's travel curve and
+    stances (its phase, strides). Values only: nothing here changes the result."""
+    from retarget.sequence import _frame_speeds, feet_around_pelvis, travel_curve
+
+    if piece.cycles == 0 and piece.progress is None:
+        _frame_speeds(piece.motion)
+    elif piece.progress is not None:
+        travel_curve(piece.motion, piece.pelvis)
+        feet_around_pelvis(piece.motion, piece.pelvis, (clip.roles["left_foot"], clip.roles["right_foot"]))
+
+
+def _transition_point(a, b, clip_a, clip_b, known: dict | None = None):
+    """The transition point (:func:`retarget.transitions.transition_point`) from piece ``a``
+    to piece ``b``, or None where neither is a one-shot or a clip is too short to have one;
+    ``known``: points already found, by clip pair (the same few clips meet many times)."""
     from retarget.transitions import transition_point
 
+    one_shot_a, one_shot_b = a.cycles == 0 and a.progress is None, b.cycles == 0 and b.progress is None
+    if not (one_shot_a or one_shot_b) or a.motion.frames < 4 or b.motion.frames < 4:
+        return None
+    key = (id(a.motion), id(b.motion), a.pelvis, b.pelvis, clip_a.stages, clip_b.stages)
+    if known is not None and key in known:
+        return known[key]
+    point = transition_point(a.motion, b.motion, clip_a.stages, clip_b.stages, a.pelvis, b.pelvis)
+    if known is not None:
+        known[key] = point
+    return point
+
+
+def _transition_points(pieces: list, clips: list, points: dict | None = None, known: dict | None = None) -> list:
+    """Clip ranges between transition points (§5.3.1) for neighbouring one-shot clips
+    (``points``: the point of pieces k and k + 1 at k, where already found; ``known``: by
+    clip pair, see :func:`_transition_point`)."""
     pieces = list(pieces)
+    known = {} if known is None else known
     for k in range(len(pieces) - 1):
         a, b = pieces[k], pieces[k + 1]
-        one_shot_a, one_shot_b = a.cycles == 0 and a.progress is None, b.cycles == 0 and b.progress is None
-        if not (one_shot_a or one_shot_b) or a.motion.frames < 4 or b.motion.frames < 4:
+        found = points[k] if points is not None and k in points else _transition_point(a, b, clips[k], clips[k + 1], known)
+        if found is None:
             continue
-        i, j = transition_point(a.motion, b.motion, clips[k].stages, clips[k + 1].stages, a.pelvis, b.pelvis)
+        i, j = found
+        one_shot_a, one_shot_b = a.cycles == 0 and a.progress is None, b.cycles == 0 and b.progress is None
         start = a.clip_in / a.motion.frame_time
         if one_shot_a and i - start >= 2:
             pieces[k] = replace(a, clip_out=i * a.motion.frame_time)
