@@ -101,3 +101,15 @@ def test_forward_kinematics_by_levels_and_blocks_is_joint_by_joint_to_the_bit(mo
         want = _kinematics_plain(motion)
         assert np.array_equal(positions, want[0]) and np.array_equal(rotations, want[1])
         assert positions.flags.c_contiguous and rotations.flags.c_contiguous
+
+
+def test_bvh_text_written_in_blocks_is_the_text_written_at_once(monkeypatch):
+    from library.manifest import builtin
+    from retarget import bvh
+    from retarget.clips import load_clips
+
+    motion = load_clips(builtin())["Walk"][0].motion
+    whole = bvh.format_bvh(motion, unit=0.01)
+    monkeypatch.setattr(bvh, "ROWS_AT_ONCE", 7)  # several blocks, the last one short
+    assert len(list(bvh.bvh_chunks(motion, unit=0.01))) > 2
+    assert bvh.format_bvh(motion, unit=0.01) == whole
