@@ -198,8 +198,9 @@ def _levels(skeleton: Skeleton) -> list[tuple[np.ndarray, np.ndarray]]:
             for d in range(1, int(depth.max(initial=0)) + 1)]
 
 
-def end_site_positions(motion: Motion, world: tuple[np.ndarray, np.ndarray] | None = None) -> dict[int, np.ndarray]:
-    """World positions (F, 3) of each End Site, by its joint."""
+def end_site_positions(motion: Motion, world: tuple[np.ndarray, np.ndarray] | None = None,
+                       joints=None) -> dict[int, np.ndarray]:
+    """World positions (F, 3) of each End Site, by its joint (only those of ``joints``, if given)."""
     positions, rotations = world if world is not None else forward_kinematics(motion)
     return {j: positions[:, j] + Rotation.from_quat(rotations[:, j]).apply(off)
-            for j, off in motion.skeleton.end_sites.items()}
+            for j, off in motion.skeleton.end_sites.items() if joints is None or j in joints}

@@ -836,14 +836,15 @@ def _compile_skeleton(library, user, clips):
     return skeleton, rest
 
 
-def quality(result: Animation) -> dict:
+def quality(result: Animation, world: tuple | None = None) -> dict:
     """Report metrics: ground penetration, root deviation from the path, transition
-    smoothness. (Sliding feet, pops and the rest are the animation check's: retarget.qa.)"""
+    smoothness. (Sliding feet, pops and the rest are the animation check's: retarget.qa.)
+    ``world``: the motion's forward kinematics, where already worked out."""
     roles = result.roles
     from retarget.skeleton import end_site_positions, forward_kinematics
 
     motion = result.motion
-    world = forward_kinematics(motion)
+    world = forward_kinematics(motion) if world is None else world
     positions = world[0]
     ends = end_site_positions(motion, world)
     points = np.concatenate([positions] + [e[:, None] for e in ends.values()], axis=1)
