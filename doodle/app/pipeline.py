@@ -169,6 +169,8 @@ def compile_doodle(doodle: Doodle, library_dir=None, use_builtin: bool = True, p
     total, done = sum(len(segs) for _, segs in recognised.values()), 0
     origin = doodle.tracks[0].p[0]  # one origin for the scene: characters keep their relative places
     results, missing, retargeted, chosen = [], {}, {}, {}
+    interacting = {(tr, seg.first, seg.action) for ta, a, tb, b in interaction_pairs(recognised)
+                   for tr, seg in ((ta, a), (tb, b))}
     for track in doodle.tracks:
         tokens, segments = recognised[track.name]
         choices = []
@@ -178,9 +180,15 @@ def compile_doodle(doodle: Doodle, library_dir=None, use_builtin: bool = True, p
             if progress:
                 done += 1
                 progress(done, total)
+        staged = sequenced(track, segments, choices, times, skeleton, rest, scale, terrain, origin, fps, jump_arc,
+                           retime, style, pin)
+        # only interactions read their clips again (their contact frames): the others are let go
+        # before the feet are pinned, so a long track does not hold every styled clip through it
+        choices = [c if (track.name, seg.first, seg.action) in interacting
+                   else replace(c, clip=_Unplayed(c.clip.path, c.clip.retargeted)) for seg, c in zip(segments, choices)]
         chosen[track.name] = choices
-        results.append(animate(track, tokens, segments, choices, times, skeleton, rest, scale, terrain, origin,
-                               fps, jump_arc, retime, style, pin))
+        results.append(finish(track, tokens, segments, staged, times, rest, scale, terrain, origin))
+        del staged
         for seg, c in zip(segments, choices):
             if (c.retargeted or not c.on_skeleton) and seg.action != "unknown":
                 (retargeted if c.retargeted else missing).setdefault(seg.action, []).append(
@@ -253,6 +261,14 @@ def choose(seg, track, actions: Actions, skeleton, rest, given, effort_model, st
                   bool(on_skeleton) and clip.retargeted)
 
 
+@dataclass(frozen=True)
+class _Unplayed:
+    """What is still read of a clip once its track is sequenced (outside interactions)."""
+
+    path: object
+    retargeted: bool
+
+
 def _span(seg, track, choice: Choice):
     """The segment's place on the doodle's timeline with what the trajectory transfer needs
     (flags, execution stage, the clip's own travel direction); and whether it travels."""
@@ -275,9 +291,17 @@ def _span(seg, track, choice: Choice):
 def animate(track, tokens, segments, choices, times, skeleton, rest, scale, terrain, origin, fps, jump_arc,
             retime, style, pin) -> Animation:
     """One track's animation: the path laid on the terrain (§5.2), the chosen clips placed
-    on it and sequenced with transitions (§5.4), feet pinned in their contacts and clamped
-    to the ground."""
-    from retarget.feet import clamp_to_ground, pin_feet
+    on it and sequenced with transitions (§5.4) (:func:`sequenced`), feet pinned in their
+    contacts and clamped to the ground (:func:`finish`)."""
+    staged = sequenced(track, segments, choices, times, skeleton, rest, scale, terrain, origin, fps, jump_arc,
+                       retime, style, pin)
+    return finish(track, tokens, segments, staged, times, rest, scale, terrain, origin)
+
+
+def sequenced(track, segments, choices, times, skeleton, rest, scale, terrain, origin, fps, jump_arc,
+              retime, style, pin) -> "Sequenced":
+    """One track's chosen clips laid on its path and sequenced on the timeline, with what
+    :func:`finish` needs (the clips' contacts where ``pin``)."""
     from retarget.sequence import Placed, contact_states, entry_phase, paced, sequence, stride_scale
     from retarget.timing import flight_times, in_flight, make_room, speed_limit
     from retarget.trajectory import world_path
@@ -328,21 +352,47 @@ def animate(track, tokens, segments, choices, times, skeleton, rest, scale, terr
             pieces[k] = replace(pc, times=window, progress=progress / stride, phase=phase)  # longer strides, faster steps
     motion, transitions = sequence(pieces, times, frame_path[:, [0, 2]], frame_heading, skeleton, fps,
                                    ground_y=frame_path[:, 1])
+    used = {seg.action: (c.clip.path if c.on_skeleton else None) for seg, c in zip(segments, choices)}
+    return Sequenced(motion, transitions, contact_states(pieces, times) if pin else None, spans, frame_path, used,
+                     [c.style for c in choices], [c.effort for c in choices])
+
+
+def finish(track, tokens, segments, staged: "Sequenced", times, rest, scale, terrain, origin) -> Animation:
+    """A track's sequenced motion (:func:`sequenced`) with its feet pinned in their
+    contacts (where it has them: foot pinning on) and clamped to the ground, as an
+    Animation. Needs none of the clips any more: they can be let go first."""
+    from retarget.feet import clamp_to_ground, pin_feet
+
+    motion, frame_path = staged.motion, staged.path
     feet = [rest.roles["left_foot"], rest.roles["right_foot"]]
     standing, sole = _standing(rest, feet)
-    if pin:
-        motion = pin_feet(motion, feet, terrain=terrain, contacts=contact_states(pieces, times),
+    if staged.contacts is not None:
+        motion = pin_feet(motion, feet, terrain=terrain, contacts=staged.contacts,
                           standing=standing, sole=sole, ground_y=frame_path[:, 1])
     motion = clamp_to_ground(motion, terrain)
     ranges = [(int(np.searchsorted(times, sp.t0)), int(min(np.searchsorted(times, sp.t1), len(times) - 1)))
-              for sp in spans]
+              for sp in staged.spans]
     projected = (track.p - origin) * scale
     projected[:, 1] = 0.0 if terrain is None else terrain.height(projected[:, [0, 2]])
-    used = {seg.action: (c.clip.path if c.on_skeleton else None) for seg, c in zip(segments, choices)}
     return Animation(track=track.name, motion=motion, segments=segments, tokens=tokens, path=frame_path,
-                     transitions=transitions, clips=used, roles=rest.roles, terrain=terrain, frame_ranges=ranges,
-                     projected=projected, styles=[c.style for c in choices], efforts=[c.effort for c in choices],
+                     transitions=staged.transitions, clips=staged.clips, roles=rest.roles, terrain=terrain,
+                     frame_ranges=ranges, projected=projected, styles=staged.styles, efforts=staged.efforts,
                      sample_times=track.t, sole=sole)
+
+
+@dataclass(frozen=True, eq=False)
+class Sequenced:
+    """A track's clips sequenced on the timeline (:func:`sequenced`), before its feet are
+    pinned (:func:`finish`): what that needs, without the clips themselves."""
+
+    motion: object  # retarget.skeleton.Motion
+    transitions: list
+    contacts: np.ndarray | None  # (F, feet) where the clips mean the feet to stand; None: no pinning
+    spans: list
+    path: np.ndarray  # (F, 3) the path per frame
+    clips: dict  # action -> clip path (None: the rest pose)
+    styles: list
+    efforts: list
 
 
 def walk_progress(times: np.ndarray, step: np.ndarray, t0: float, t1: float) -> tuple[np.ndarray, np.ndarray]:
