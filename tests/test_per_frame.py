@@ -113,3 +113,18 @@ def test_bvh_text_written_in_blocks_is_the_text_written_at_once(monkeypatch):
     monkeypatch.setattr(bvh, "ROWS_AT_ONCE", 7)  # several blocks, the last one short
     assert len(list(bvh.bvh_chunks(motion, unit=0.01))) > 2
     assert bvh.format_bvh(motion, unit=0.01) == whole
+
+
+def test_csv_rows_read_at_once_are_the_rows_read_line_by_line():
+    from doodle.input import csvimport
+
+    rng = np.random.default_rng(5)
+    fields = ["1.5", " 2.25", "-0", "+3", "1e-3", "nan", "-7.125 ", "0.1", "12345.678901234567", "-inf"]
+    rows = [",".join(rng.choice(fields, 6)) for _ in range(40)]
+    used = [4, 0, 2, 5]  # not in file order
+    fast = csvimport._parse_data(rows, list(range(1, 41)), 6, used, list("abcd"), "x.csv")
+    plain = np.array([[float(r.split(",")[j]) for j in used] for r in rows])
+    assert fast.shape == (40, 4)
+    assert np.array_equal(fast, plain, equal_nan=True) and np.array_equal(np.signbit(fast), np.signbit(plain))
+    odd = rows[:3] + ["1_000,2,3,4,5,6"]  # only float() reads it: line by line, as before
+    assert csvimport._parse_data(odd, [1, 2, 3, 4], 6, [0], ["t"], "x.csv")[-1, 0] == 1000.0
