@@ -96,7 +96,8 @@ def run_child(argv: list[str], env: dict) -> tuple[float, float]:
         child.returncode = os.waitstatus_to_exitcode(status)
         if child.returncode != 0:
             err.seek(0)
-            raise RuntimeError(f"{' '.join(argv)} failed ({child.returncode}): {err.read().decode()[-2000:]}")
+            lines = err.read().decode(errors="replace").strip().splitlines() or [""]
+            raise RuntimeError(f"exit status {child.returncode}: {lines[-1][-300:]}")
     return wall, usage.ru_maxrss / 1024.0  # KB on Linux
 
 
@@ -157,7 +158,7 @@ def main(argv: list[str] | None = None) -> None:
             try:
                 results = [run_child(cli + [str(doodle), "-o", str(out)], env) for _ in range(runs)]
             except RuntimeError as e:  # (an earlier version ran out of memory on the hour)
-                print(f"  {name:>4} ({seconds:7.1f} s): failed — {str(e).strip().splitlines()[-1][:160]}", flush=True)
+                print(f"  {name:>4} ({seconds:7.1f} s): failed — {e}", flush=True)
                 continue
             wall = statistics.median(r[0] for r in results)
             rss = max(r[1] for r in results)
