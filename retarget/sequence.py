@@ -271,6 +271,7 @@ def sequence(placed: list[Placed], times: np.ndarray, path_xz: np.ndarray, headi
     weight = np.zeros(frames)
     boundaries = [pl.span.t0 for pl in placed[1:]]
     for pl, idx, w in _blend_weights(placed, times, blend):
+        idx = slice(int(idx[0]), int(idx[-1]) + 1)  # consecutive frames: views, not copies
         tt = times[idx]
         tr, ro = pose_at(pl, tt, path_xz[idx], heading[idx], None if ground_y is None else ground_y[idx])
         first = weight[idx] == 0
