@@ -3,8 +3,8 @@
 import sys
 
 from bench import (animation_check, batch_compile, bvh_speed, contexter_speed, laban_effort, learning_protocol,
-                   long_doodles, matcher_speed, performers, real_gestures, render_speed, replay_latency, segmenter_speed,
-                   stages_accuracy, startup, stylize_signatures, stylize_speed, terrain_speed)
+                   long_doodles, matcher_speed, performers, real_gestures, render_speed, replay_latency,
+                   segmenter_speed, stages_accuracy, startup, stylize_signatures, stylize_speed, terrain_speed)
 
 
 def main() -> int:

@@ -349,7 +349,8 @@ def sequenced(track, segments, choices, times, skeleton, rest, scale, terrain, o
                 phase = entry_phase(before.motion, before.pelvis,
                                     [choices[k - 1].clip.roles[f] for f in ("left_foot", "right_foot")],
                                     at if before.cycles == 0 else 0.0, pc.motion, pc.pelvis, feet)
-            pieces[k] = replace(pc, times=window, progress=progress / stride, phase=phase)  # longer strides, faster steps
+            # longer strides, faster steps
+            pieces[k] = replace(pc, times=window, progress=progress / stride, phase=phase)
     motion, transitions = sequence(pieces, times, frame_path[:, [0, 2]], frame_heading, skeleton, fps,
                                    ground_y=frame_path[:, 1])
     used = {seg.action: (c.clip.path if c.on_skeleton else None) for seg, c in zip(segments, choices)}
@@ -848,7 +849,10 @@ def _transition_points(pieces: list, clips: list, points: dict | None = None, kn
     known = {} if known is None else known
     for k in range(len(pieces) - 1):
         a, b = pieces[k], pieces[k + 1]
-        found = points[k] if points is not None and k in points else _transition_point(a, b, clips[k], clips[k + 1], known)
+        if points is not None and k in points:
+            found = points[k]
+        else:
+            found = _transition_point(a, b, clips[k], clips[k + 1], known)
         if found is None:
             continue
         i, j = found
