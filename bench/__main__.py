@@ -3,8 +3,8 @@
 import sys
 
 from bench import (animation_check, batch_compile, bvh_speed, contexter_speed, laban_effort, learning_protocol,
-                   matcher_speed, performers, real_gestures, render_speed, replay_latency, segmenter_speed,
-                   stages_accuracy, startup, stylize_signatures, stylize_speed, terrain_speed)
+                   long_doodles, matcher_speed, performers, real_gestures, render_speed, replay_latency,
+                   segmenter_speed, stages_accuracy, startup, stylize_signatures, stylize_speed, terrain_speed)
 
 
 def main() -> int:
@@ -42,6 +42,8 @@ def main() -> int:
     animation_check.main()
     print()
     batch_compile.main([])
+    print()
+    long_doodles.main([])
     return 0
 
 

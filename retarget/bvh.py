@@ -501,12 +501,22 @@ def write_bvh(path, motion: Motion, unit: float = 1.0, precision: int = 6) -> No
     """
     from doodle.core.files import atomic_write  # local import: keeps reading light
 
-    text = format_bvh(motion, unit=unit, precision=precision, source=str(path))
-    atomic_write(path, [text])
+    atomic_write(path, bvh_chunks(motion, unit=unit, precision=precision, source=str(path)))
 
 
 def format_bvh(motion: Motion, unit: float = 1.0, precision: int = 6, source: str = "BVH") -> str:
     """The text of the BVH file :func:`write_bvh` writes."""
+    return "".join(bvh_chunks(motion, unit, precision, source))
+
+
+ROWS_AT_ONCE = 8192  # frames converted and formatted at once: the text is written block by block
+
+
+def bvh_chunks(motion: Motion, unit: float = 1.0, precision: int = 6, source: str = "BVH"):
+    """The text of the BVH file :func:`write_bvh` writes, in pieces: the hierarchy, then the
+    motion's rows :data:`ROWS_AT_ONCE` frames at a time (each converted when it is reached,
+    so a long motion never has all its text, angles or rows in memory at once). Everything
+    that can make the motion unwritable is checked before the first piece is returned."""
     if not _is_positive(unit):
         raise DoodleError(f"{source}: unit must be a positive number of metres per file unit, not {unit!r}")
     if not isinstance(precision, (int, np.integer)) or not 0 <= precision <= 12:
@@ -521,10 +531,11 @@ def format_bvh(motion: Motion, unit: float = 1.0, precision: int = 6, source: st
     frame_time = float(motion.frame_time)
     if not (math.isfinite(frame_time) and frame_time > 0):
         raise DoodleError(f"{source}: frame time must be a positive number of seconds, not {frame_time!r}")
-    translations = np.asarray(motion.translations, dtype=float) / unit
+    translations = np.asarray(motion.translations, dtype=float)  # divided by ``unit`` where used
     rotations = np.asarray(motion.rotations, dtype=float)
     offsets = np.asarray(sk.offsets, dtype=float) / unit
-    for what, arr in (("translations", translations), ("rotations", rotations), ("offsets", offsets)):
+    for what, arr in (("translations", translations / unit if unit != 1.0 else translations),
+                      ("rotations", rotations), ("offsets", offsets)):
         if not np.isfinite(arr).all():
             f = np.argwhere(~np.isfinite(arr))[0]
             raise DoodleError(f"{source}: cannot write non-finite {what} (at index {tuple(int(v) for v in f)})")
@@ -536,7 +547,7 @@ def format_bvh(motion: Motion, unit: float = 1.0, precision: int = 6, source: st
         if not name or " ".join(name.split()) != name or {"{", "}"} & set(name.split()):
             raise DoodleError(f"{source}: joint name {name!r} cannot be written to BVH")
         chans = tuple(sk.channels[j])
-        moves = bool(np.abs(translations[:, j] - offsets[j]).max() > tol)
+        moves = bool(np.abs(translations[:, j] / unit - offsets[j]).max() > tol)
         if not chans:
             chans = _DEFAULT_ROOT_CHANNELS if j == 0 or moves else _DEFAULT_CHANNELS
         bad = [c for c in chans if c not in _CHANNELS.values()]
@@ -552,16 +563,7 @@ def format_bvh(motion: Motion, unit: float = 1.0, precision: int = 6, source: st
                 raise DoodleError(f"{source}: joint {name!r} has no rotation channels but rotates")
         layouts.append(chans)
 
-    width = sum(len(c) for c in layouts)
     orders = ["".join(c[0] for c in chans if c in ROTATION_CHANNELS) for chans in layouts]
-    angles: dict[int, np.ndarray] = {}
-    for order in set(orders) - {""}:  # one scipy call per distinct order, all its joints at once
-        js = [j for j, o in enumerate(orders) if o == order]
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")  # gimbal lock: the rotation is still represented exactly
-            e = Rotation.from_quat(rotations[:, js].reshape(-1, 4)).as_euler(order, degrees=True)
-        e = e.reshape(n_frames, len(js), 3)
-        angles.update((j, e[:, n]) for n, j in enumerate(js))
     children: list[list[int]] = [[] for _ in range(n_joints)]
     for j in range(1, n_joints):
         children[int(sk.parents[j])].append(j)
@@ -570,18 +572,6 @@ def format_bvh(motion: Motion, unit: float = 1.0, precision: int = 6, source: st
         j = todo.pop()
         preorder.append(j)
         todo += reversed(children[j])
-    data = np.empty((n_frames, width))
-    col = 0
-    for j in preorder:
-        chans = layouts[j]
-        r = 0
-        for i, c in enumerate(chans):
-            if c in POSITION_CHANNELS:
-                data[:, col + i] = translations[:, j, "XYZ".index(c[0])]
-            else:
-                data[:, col + i] = angles[j][:, r]
-                r += 1
-        col += len(chans)
 
     out = ["HIERARCHY\n"]
     end_sites = {int(k): np.asarray(v, dtype=float).reshape(3) / unit for k, v in sk.end_sites.items()}
@@ -605,8 +595,44 @@ def format_bvh(motion: Motion, unit: float = 1.0, precision: int = 6, source: st
         for c in reversed(children[j]):
             stack.append((c, depth + 1, False))
     out.append(f"MOTION\nFrames: {n_frames}\nFrame Time: {frame_time!r}\n")
-    out.append(_format_rows(data, precision))
-    return "".join(out)
+    head = "".join(out)
+
+    def pieces():
+        yield head
+        for a in range(0, n_frames, ROWS_AT_ONCE):
+            block = slice(a, min(a + ROWS_AT_ONCE, n_frames))
+            yield _format_rows(_channel_rows(translations[block] / unit, rotations[block], layouts, orders, preorder),
+                               precision)
+
+    return pieces()
+
+
+def _channel_rows(translations: np.ndarray, rotations: np.ndarray, layouts: list, orders: list,
+                  preorder: list) -> np.ndarray:
+    """(frames, channels) the values of every joint's channels, in the file's joint order:
+    positions in file units, Euler angles in degrees."""
+    n_frames = len(translations)
+    angles: dict[int, np.ndarray] = {}
+    for order in set(orders) - {""}:  # one scipy call per distinct order, all its joints at once
+        js = [j for j, o in enumerate(orders) if o == order]
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # gimbal lock: the rotation is still represented exactly
+            e = Rotation.from_quat(rotations[:, js].reshape(-1, 4)).as_euler(order, degrees=True)
+        e = e.reshape(n_frames, len(js), 3)
+        angles.update((j, e[:, n]) for n, j in enumerate(js))
+    data = np.empty((n_frames, sum(len(c) for c in layouts)))
+    col = 0
+    for j in preorder:
+        chans = layouts[j]
+        r = 0
+        for i, c in enumerate(chans):
+            if c in POSITION_CHANNELS:
+                data[:, col + i] = translations[:, j, "XYZ".index(c[0])]
+            else:
+                data[:, col + i] = angles[j][:, r]
+                r += 1
+        col += len(chans)
+    return data
 
 
 def _offset_text(v: np.ndarray, precision: int) -> str:

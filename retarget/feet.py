@@ -40,6 +40,15 @@ def two_bone_ik(motion: Motion, hip: int, knee: int, ankle: int, target: np.ndar
     motion's forward kinematics if already known (only this leg's chain must be current).
     ``front`` (F, 3): the way the knee bends (a leg's: the body's front) wherever the chain
     is too straight to tell or bends the other way (so a knee never flips backwards)."""
+    rots = motion.rotations.copy()
+    _leg_ik(rots, motion, hip, knee, ankle, target, weight, world, front)
+    return replace(motion, rotations=rots)
+
+
+def _leg_ik(rots: np.ndarray, motion: Motion, hip: int, knee: int, ankle: int, target: np.ndarray,
+            weight: np.ndarray, world: tuple | None = None, front: np.ndarray | None = None) -> None:
+    """:func:`two_bone_ik` written into ``rots`` (a copy of ``motion.rotations``; only the
+    leg's hip, knee and ankle are changed, so the legs of one body share one copy)."""
     positions, world = forward_kinematics(motion) if world is None else world
     a, b, c = positions[:, hip], positions[:, knee], positions[:, ankle]
     t = c + (target - c) * weight[:, None]
@@ -57,9 +66,7 @@ def two_bone_ik(motion: Motion, hip: int, knee: int, ankle: int, target: np.ndar
     # straight throughout bends about the hip's own x axis
     bent = np.linalg.norm(axis0, axis=1) > 0.15 * lab * lcb
     if bent.any():
-        idx = np.flatnonzero(bent)
-        nearest = idx[np.abs(idx[None, :] - np.arange(len(bent))[:, None]).argmin(axis=1)]
-        axis0 = axis0[nearest]  # a bent frame is its own nearest
+        axis0 = axis0[nearest_true(bent)]  # a bent frame is its own nearest
     else:
         axis0 = quat.rotate(world[:, hip], np.tile([1.0, 0.0, 0.0], (len(axis0), 1)))
     axis0 = _unit(axis0)
@@ -75,14 +82,24 @@ def two_bone_ik(motion: Motion, hip: int, knee: int, ankle: int, target: np.ndar
     r0 = quat.exp(quat.rotate(a_inv, axis0) * (ac_ab_1 - ac_ab_0)[:, None])
     r1 = quat.exp(quat.rotate(b_inv, axis0) * (ba_bc_1 - ba_bc_0)[:, None])
     r2 = quat.exp(quat.rotate(a_inv, axis1) * ac_at_0[:, None])
-    rots = motion.rotations.copy()
     rots[:, hip] = quat.multiply(quat.multiply(rots[:, hip], r0), r2)
     rots[:, knee] = quat.multiply(rots[:, knee], r1)
     # the foot keeps its orientation in the world (its sole stays on the ground)
     new_hip_world = quat.multiply(world[:, int(motion.skeleton.parents[hip])], rots[:, hip])
     new_knee_world = quat.multiply(new_hip_world, rots[:, knee])
     rots[:, ankle] = quat.multiply(quat.conjugate(new_knee_world), world[:, ankle])
-    return replace(motion, rotations=rots)
+
+
+def nearest_true(mask: np.ndarray) -> np.ndarray:
+    """(F,) for each frame the index of the nearest frame where ``mask`` (F,) bool, not
+    empty, is true (the earlier one on a tie): two neighbours found by ``searchsorted``, so
+    the cost stays constant per frame at any length."""
+    idx = np.flatnonzero(mask)
+    frames = np.arange(len(mask))
+    right = np.minimum(np.searchsorted(idx, frames), len(idx) - 1)
+    left = np.maximum(right - 1, 0)
+    take_left = np.abs(frames - idx[left]) <= np.abs(idx[right] - frames)
+    return np.where(take_left, idx[left], idx[right])
 
 
 def _intervals(mask: np.ndarray) -> list[tuple[int, int]]:
@@ -150,15 +167,21 @@ def pin_feet(motion: Motion, feet: list[int], fade: int = 3, terrain=None, conta
     motion = _lower_to_reach(motion, original, feet, targets, weights)
     world = forward_kinematics(motion)
     front = _front(motion, world[0], feet)
+    rots = None  # the legs share one copy of the rotations (each changes only its own joints)
     for k, ankle in enumerate(feet):
         knee = int(motion.skeleton.parents[ankle])
         hip = int(motion.skeleton.parents[knee]) if knee >= 0 else -1
         if hip < 0 or not weights[k].any():
             continue
-        motion = two_bone_ik(motion, hip, knee, ankle, targets[k], weights[k], world=world, front=front)
+        rots = motion.rotations.copy() if rots is None else rots
+        _leg_ik(rots, motion, hip, knee, ankle, targets[k], weights[k], world=world, front=front)
+    motion = motion if rots is None else replace(motion, rotations=rots)
     if terrain is not None:  # the foot laid along the slope under it
         motion = _soles_on_ground(motion, original, feet, terrain, ground_y)
+    del original
+    world = None  # freed before the next is made
     world = forward_kinematics(motion)
+    rots = None
     for k, ankle in enumerate(feet):  # a standing foot's lowest point (heel, toes) on the ground
         knee = int(motion.skeleton.parents[ankle])
         hip = int(motion.skeleton.parents[knee]) if knee >= 0 else -1
@@ -166,9 +189,10 @@ def pin_feet(motion: Motion, feet: list[int], fade: int = 3, terrain=None, conta
             continue
         gap = _clearance(motion, world, ankle, terrain) - sole
         target = world[0][:, ankle] - np.outer(gap, [0.0, 1.0, 0.0])
-        motion = two_bone_ik(motion, hip, knee, ankle, target, helds[k] ** 4, world=world,  # only a stance: not a lifting foot
-                             front=front)
-    return motion
+        rots = motion.rotations.copy() if rots is None else rots
+        _leg_ik(rots, motion, hip, knee, ankle, target, helds[k] ** 4, world=world,  # only a stance: not a lifting foot
+                front=front)
+    return motion if rots is None else replace(motion, rotations=rots)
 
 
 def _front(motion: Motion, positions: np.ndarray, feet: list[int]) -> np.ndarray | None:
@@ -189,7 +213,7 @@ def _clearance(motion: Motion, world, ankle: int, terrain) -> np.ndarray:
     from retarget.skeleton import end_site_positions
 
     joints = motion.skeleton.subtree(ankle)
-    ends = end_site_positions(motion, world)
+    ends = end_site_positions(motion, world, joints)
     points = [world[0][:, j] for j in joints] + [ends[j] for j in joints if j in ends]
     return np.min([p[:, 1] - _ground(terrain, p[:, [0, 2]]) for p in points], axis=0)
 

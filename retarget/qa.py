@@ -377,16 +377,17 @@ def reaction_onset(motion: Motion, joint: int, first: int, last: int, limits: Li
 
 
 def check_scene(motions: dict, terrain=None, limits: Limits = Limits(), ground: float | None = 0.0,
-                contacts: tuple = (), soles: dict | None = None) -> dict:
+                contacts: tuple = (), soles: dict | None = None, worlds: dict | None = None) -> dict:
     """Every character's :class:`Check` with interpenetration against the others; the
     ground is ``terrain``, else the height ``ground`` (None: each motion's own floor, as
     for motion capture). ``contacts`` (:class:`Contact`): the scene's interactions, whose
     contact joints may touch and must meet, and whose reactions must not lead the contact
     (both characters of an interaction get its findings). ``soles``: per character, how high
-    its skeleton's feet stand on the floor (:func:`check`'s ``sole``)."""
+    its skeleton's feet stand on the floor (:func:`check`'s ``sole``). ``worlds``: each
+    motion's forward kinematics, where already worked out (shared with the report's metrics)."""
     from dataclasses import replace
 
-    worlds = {name: forward_kinematics(m) for name, m in motions.items()}
+    worlds = {name: (worlds or {}).get(name) or forward_kinematics(m) for name, m in motions.items()}
     out = {name: check(m, terrain, limits, ground=ground if terrain is None else None, world=worlds[name],
                        sole=(soles or {}).get(name, 0.0)) for name, m in motions.items()}
     joints = {name: guess_roles(m.skeleton) for name, m in motions.items()}

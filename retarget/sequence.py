@@ -17,12 +17,10 @@ joined by blended transitions, into one motion on one timeline.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from functools import lru_cache
-
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from retarget.skeleton import Motion, Skeleton, end_site_positions, forward_kinematics
+from retarget.skeleton import Motion, Skeleton, end_site_positions, forward_kinematics, per_motion
 from retarget.trajectory import Span
 
 
@@ -49,7 +47,12 @@ class Placed:
 
 def travel_curve(motion: Motion, pelvis: int) -> np.ndarray:
     """Distance (m) the pelvis has travelled at each frame of a cyclic clip, along its net
-    direction of travel, made non-decreasing."""
+    direction of travel, made non-decreasing (worked out once per clip; read-only)."""
+    return _travel_curve(motion, int(pelvis))
+
+
+@per_motion
+def _travel_curve(motion: Motion, pelvis: int) -> np.ndarray:
     xz = forward_kinematics(motion)[0][:, pelvis][:, [0, 2]]
     net = xz[-1] - xz[0]
     norm = np.linalg.norm(net)
@@ -101,15 +104,20 @@ def clip_time(placed: Placed, t: np.ndarray) -> np.ndarray:
     return placed.clip_in + u * (end - placed.clip_in)
 
 
-def _feet_around_pelvis(motion: Motion, pelvis: int, feet: list[int]) -> np.ndarray:
+def feet_around_pelvis(motion: Motion, pelvis: int, feet) -> np.ndarray:
     """(F, feet, 2): each foot's horizontal place relative to the pelvis, in the pelvis's own
-    heading (so clips facing different ways compare)."""
+    heading (so clips facing different ways compare); worked out once per clip, read-only."""
+    return _feet_around_pelvis(motion, int(pelvis), tuple(int(f) for f in feet))
+
+
+@per_motion
+def _feet_around_pelvis(motion: Motion, pelvis: int, feet: tuple) -> np.ndarray:
     positions, rotations = forward_kinematics(motion)
     from doodle.core import quat
 
     front = quat.rotate(rotations[:, pelvis], np.tile([0.0, 0.0, 1.0], (motion.frames, 1)))
     yaw = np.arctan2(front[:, 0], front[:, 2])
-    rel = positions[:, feet][:, :, [0, 2]] - positions[:, [pelvis]][:, :, [0, 2]]
+    rel = positions[:, list(feet)][:, :, [0, 2]] - positions[:, [pelvis]][:, :, [0, 2]]
     c, s = np.cos(yaw)[:, None], np.sin(yaw)[:, None]
     return np.stack([c * rel[..., 0] - s * rel[..., 1], s * rel[..., 0] + c * rel[..., 1]], axis=-1)
 
@@ -121,8 +129,8 @@ def entry_phase(before: Motion, before_pelvis: int, before_feet: list[int], at: 
     (feet together after a stand: a side step opens with its lead foot, a walk from
     mid-swing), so the blend between them does not cross or drag the feet."""
     frame = int(np.clip(round(at / before.frame_time), 0, before.frames - 1))
-    last = _feet_around_pelvis(before.slice(frame, frame + 1), before_pelvis, before_feet)[0]
-    stances = _feet_around_pelvis(cycle, pelvis, feet)
+    last = feet_around_pelvis(before.slice(frame, frame + 1), before_pelvis, before_feet)[0]
+    stances = feet_around_pelvis(cycle, pelvis, feet)
     best = int(np.argmin(np.linalg.norm(stances - last, axis=2).sum(axis=1)))
     return float(travel_curve(cycle, pelvis)[best])
 
@@ -162,16 +170,14 @@ def _limits(motion: Motion, clip_in: float, clip_out: float | None, limit: float
     return knots, step, least
 
 
-@lru_cache(maxsize=64)
+@per_motion
 def _frame_speeds(motion: Motion) -> np.ndarray:
     """(F − 1,) the fastest joint or end site (m/s) between each two frames of a clip (read
     many times while a clip is given room and paced: computed once per clip)."""
     world = forward_kinematics(motion)
     ends = end_site_positions(motion, world)
     positions = np.concatenate([world[0]] + [e[:, None] for e in ends.values()], axis=1)
-    speeds = np.linalg.norm(np.diff(positions, axis=0), axis=2).max(axis=1) / motion.frame_time
-    speeds.flags.writeable = False
-    return speeds
+    return np.linalg.norm(np.diff(positions, axis=0), axis=2).max(axis=1) / motion.frame_time
 
 
 def shortest(motion: Motion, clip_in: float = 0.0, clip_out: float | None = None, limit: float = FASTEST,
@@ -265,6 +271,7 @@ def sequence(placed: list[Placed], times: np.ndarray, path_xz: np.ndarray, headi
     weight = np.zeros(frames)
     boundaries = [pl.span.t0 for pl in placed[1:]]
     for pl, idx, w in _blend_weights(placed, times, blend):
+        idx = slice(int(idx[0]), int(idx[-1]) + 1)  # consecutive frames: views, not copies
         tt = times[idx]
         tr, ro = pose_at(pl, tt, path_xz[idx], heading[idx], None if ground_y is None else ground_y[idx])
         first = weight[idx] == 0
@@ -286,12 +293,17 @@ def _blend_weights(placed: list[Placed], times: np.ndarray, blend: float):
     for k, pl in enumerate(placed):
         lo = pl.span.t0 - (blend / 2 if k > 0 else 0.0)
         hi = pl.span.t1 + (blend / 2 if k < len(placed) - 1 else 0.0)
-        mask = (times >= lo - 1e-9) & (times <= hi + 1e-9)
-        if k == 0:
-            mask |= times < pl.span.t0
-        if k == len(placed) - 1:
-            mask |= times > pl.span.t1
-        idx = np.flatnonzero(mask)
+        first = int(np.searchsorted(times, lo - 1e-9, side="left"))  # times sorted: a span, not a mask
+        stop = int(np.searchsorted(times, hi + 1e-9, side="right"))
+        if k == 0:  # ... and every frame before the first span
+            before = int(np.searchsorted(times, pl.span.t0, side="left"))
+            if before > 0:
+                first, stop = 0, max(stop, before)
+        if k == len(placed) - 1:  # ... and every frame after the last
+            after = int(np.searchsorted(times, pl.span.t1, side="right"))
+            if after < len(times):
+                first, stop = min(first, after), len(times)
+        idx = np.arange(first, max(stop, first))
         if len(idx) == 0:
             continue
         w = np.ones(len(idx))

@@ -12,8 +12,9 @@ are quaternions. World frame: right-handed, +y up.
 
 from __future__ import annotations
 
+import weakref
 from dataclasses import dataclass, field, replace
-from functools import lru_cache
+from functools import lru_cache, wraps
 
 import numpy as np
 from scipy.spatial.transform import Rotation
@@ -92,6 +93,30 @@ class Motion:
         return replace(self, translations=self.translations[start:stop], rotations=self.rotations[start:stop])
 
 
+def per_motion(fn):
+    """``fn(motion, *args)`` worked out once per motion and arguments and kept for as long as
+    the motion lives (a :class:`weakref.WeakKeyDictionary`; motions are never changed in
+    place, so it stays true). For small results read in several passes over a compile's
+    clips (a clip's travel curve, its joints' speeds), where a recency cache of the clips'
+    forward kinematics would be long gone by the next pass. Arrays come back read-only."""
+    memo: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+    @wraps(fn)
+    def kept(motion: "Motion", *args):
+        known = memo.get(motion)
+        if known is None:
+            known = memo[motion] = {}
+        if args not in known:
+            out = fn(motion, *args)
+            if isinstance(out, np.ndarray):
+                out.flags.writeable = False
+            known[args] = out
+        return known[args]
+
+    kept.cache_clear = memo.clear
+    return kept
+
+
 FK_CACHED = 20_000  # joint-frames: motions up to this size (a clip: ~2,000) keep their forward kinematics
 
 
@@ -115,27 +140,67 @@ def _kept_kinematics(motion: Motion) -> tuple[np.ndarray, np.ndarray]:
     return positions, rotations
 
 
-def _kinematics(motion: Motion) -> tuple[np.ndarray, np.ndarray]:
-    from doodle.core import quat
+FK_BLOCK = 4096  # frames worked out at once: the temporaries stay small (and in the cache) at any length
 
-    sk = motion.skeleton
-    f, j = motion.frames, len(sk)
+
+def _kinematics(motion: Motion) -> tuple[np.ndarray, np.ndarray]:
+    """World positions and (normalised) rotations, joints a depth level at a time and frames
+    in blocks of :data:`FK_BLOCK`, each component a contiguous row: the same arithmetic,
+    in the same order, as composing joint by joint with :func:`doodle.core.quat.multiply`
+    and :func:`~doodle.core.quat.rotate` (bit for bit), at a cost per frame that does not
+    grow with the motion's length."""
+    f, j = motion.frames, len(motion.skeleton)
     positions = np.empty((f, j, 3))
     rotations = np.empty((f, j, 4))
-    for k in range(j):
-        p = sk.parents[k]
-        if p < 0:
-            rotations[:, k] = motion.rotations[:, k]
-            positions[:, k] = motion.translations[:, k]
-        else:
-            rotations[:, k] = quat.multiply(rotations[:, p], motion.rotations[:, k])
-            positions[:, k] = positions[:, p] + quat.rotate(rotations[:, p], motion.translations[:, k])
+    levels = _levels(motion.skeleton)
+    for a in range(0, f, FK_BLOCK):
+        b = min(a + FK_BLOCK, f)
+        pos, rot = _kinematics_block(motion.translations[a:b], motion.rotations[a:b], levels)
+        positions[a:b] = pos.transpose(2, 1, 0)
+        rotations[a:b] = rot.transpose(2, 1, 0)
     norm = np.linalg.norm(rotations, axis=-1, keepdims=True)
     return positions, rotations / norm
 
 
-def end_site_positions(motion: Motion, world: tuple[np.ndarray, np.ndarray] | None = None) -> dict[int, np.ndarray]:
-    """World positions (F, 3) of each End Site, by its joint."""
+def _kinematics_block(translations: np.ndarray, rotations: np.ndarray, levels) -> tuple[np.ndarray, np.ndarray]:
+    """Unnormalised world positions (3, J, F) and rotations (4, J, F) of frames (F, J, ·)."""
+    local_t = np.ascontiguousarray(translations.transpose(2, 1, 0))
+    local_r = np.ascontiguousarray(rotations.transpose(2, 1, 0))
+    pos = np.empty_like(local_t)
+    rot = np.empty_like(local_r)
+    pos[:, 0] = local_t[:, 0]
+    rot[:, 0] = local_r[:, 0]
+    for idx, par in levels:
+        ax, ay, az, aw = rot[:, par]  # the parents' world rotations (as quat.multiply's a, quat.rotate's q)
+        bx, by, bz, bw = local_r[:, idx]
+        rot[0, idx] = aw * bx + ax * bw + ay * bz - az * by
+        rot[1, idx] = aw * by - ax * bz + ay * bw + az * bx
+        rot[2, idx] = aw * bz + ax * by - ay * bx + az * bw
+        rot[3, idx] = aw * bw - ax * bx - ay * by - az * bz
+        ux, uy, uz = local_t[:, idx]
+        tx = 2.0 * (ay * uz - az * uy)
+        ty = 2.0 * (az * ux - ax * uz)
+        tz = 2.0 * (ax * uy - ay * ux)
+        px, py, pz = pos[:, par]
+        pos[0, idx] = px + (ux + aw * tx + (ay * tz - az * ty))
+        pos[1, idx] = py + (uy + aw * ty + (az * tx - ax * tz))
+        pos[2, idx] = pz + (uz + aw * tz + (ax * ty - ay * tx))
+    return pos, rot
+
+
+@lru_cache(maxsize=32)
+def _levels(skeleton: Skeleton) -> list[tuple[np.ndarray, np.ndarray]]:
+    """(joints, their parents) per depth below the root, root's children first."""
+    depth = np.zeros(len(skeleton), dtype=int)
+    for k in range(1, len(skeleton)):
+        depth[k] = depth[skeleton.parents[k]] + 1
+    return [(np.flatnonzero(depth == d), skeleton.parents[depth == d].astype(np.intp))
+            for d in range(1, int(depth.max(initial=0)) + 1)]
+
+
+def end_site_positions(motion: Motion, world: tuple[np.ndarray, np.ndarray] | None = None,
+                       joints=None) -> dict[int, np.ndarray]:
+    """World positions (F, 3) of each End Site, by its joint (only those of ``joints``, if given)."""
     positions, rotations = world if world is not None else forward_kinematics(motion)
     return {j: positions[:, j] + Rotation.from_quat(rotations[:, j]).apply(off)
-            for j, off in motion.skeleton.end_sites.items()}
+            for j, off in motion.skeleton.end_sites.items() if joints is None or j in joints}

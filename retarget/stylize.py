@@ -48,7 +48,7 @@ from retarget.analysis import Stages, foot_contacts, guess_roles, partition, pel
 from retarget.effort_signature import FASTEST, RATE, burst, most_moving, speed_profile
 from retarget.feet import two_bone_ik
 from retarget.qa import Limits, check, planted_moves
-from retarget.skeleton import Motion, forward_kinematics
+from retarget.skeleton import Motion, forward_kinematics, per_motion
 
 ALPHA_WEIGHT = 1.5
 ALPHA_LIGHT = 0.5  # Light: speed as played ∝ V_e^(1 − 0.5|L_w|) — flattened, never inverted (α ≥ 1 would make the slowest frames the fastest)
@@ -170,11 +170,11 @@ def _restore_contacts(before: Motion, after: Motion, world=None, clip_frames: np
     world = world or forward_kinematics(after)  # the legs are separate chains: one pass serves both
     frames = np.arange(after.frames)
     clip = np.arange(before.frames)
-    flat, step = planted_moves(before, (old, old_rot))
+    flat, step = _own_planted_moves(before)
     for k, ankle in enumerate(feet):
         knee = int(before.skeleton.parents[ankle])
         hip = int(before.skeleton.parents[knee]) if knee >= 0 else -1
-        planted = foot_contacts(before, [ankle], world=old)[:, 0].copy()
+        planted = _own_contacts(before, ankle).copy()
         slid = np.zeros((before.frames - 1, 2))
         if flat.shape[1] == len(feet):
             planted |= flat[:, k]
@@ -209,6 +209,22 @@ def _restore_contacts(before: Motion, after: Motion, world=None, clip_frames: np
             turned[:, ankle] = _slerp(world[1][:, ankle], _at(old_rot[:, ankle], f), weight)
             after = two_bone_ik(after, hip, knee, ankle, target, weight, world=(world[0], turned))
     return after
+
+
+@per_motion
+def _own_planted_moves(motion: Motion) -> tuple[np.ndarray, np.ndarray]:
+    """``retarget.qa.planted_moves`` of a neutral clip on its own kinematics: read by every
+    styling of the clip, several times each (worked out once per clip; read-only)."""
+    flat, step = planted_moves(motion, forward_kinematics(motion))
+    flat.flags.writeable = False
+    step.flags.writeable = False
+    return flat, step
+
+
+@per_motion
+def _own_contacts(motion: Motion, ankle: int) -> np.ndarray:
+    """(F,) a neutral clip's foot contacts of one foot (once per clip; read-only)."""
+    return foot_contacts(motion, [ankle], world=forward_kinematics(motion)[0])[:, 0]
 
 
 def _at(q: np.ndarray, f: np.ndarray) -> np.ndarray:
@@ -510,12 +526,12 @@ def _least(world: np.ndarray) -> np.ndarray:
     return np.linalg.norm(np.diff(world, axis=0), axis=2).max(axis=1) / (SPEED_MARGIN * FASTEST)
 
 
-def _planted_least(motion: Motion, world) -> np.ndarray:
+def _planted_least(motion: Motion) -> np.ndarray:
     """Per clip frame interval, the least time it may take so a foot flat on the floor in the
     neutral clip (``retarget.qa.planted_moves``) at either end of it — shuffling, turning on
     its ball, landing — moves no faster than in the neutral, or than :data:`PLANTED_SPEED`:
     played faster, a foot creeping over the floor, or landing, slides."""
-    flat, step = planted_moves(motion, world)
+    flat, step = _own_planted_moves(motion)
     if not flat.size:
         return np.zeros(max(motion.frames - 1, 0))
     least = np.minimum(motion.frame_time, np.linalg.norm(step, axis=2) / PLANTED_SPEED)
@@ -578,7 +594,7 @@ def stylize_staged(motion: Motion, stages: Stages, lt: float = 0.0, lw: float = 
     if lw:
         times = _weight_times(world[0], times, lw)
     times = _smooth_rate(times, motion.frame_time)
-    least = np.maximum(_least(world[0]), _planted_least(motion, neutral))
+    least = np.maximum(_least(world[0]), _planted_least(motion))
     for _ in range(5):  # the output measured as it plays — spline, contact IK and all — and slowed where too fast
         times = _bounded(times, least, keep_duration=not lt)
         out, clip_t = _retimed(m, lambda _: times, oversample=_oversample(m))

@@ -169,6 +169,8 @@ def compile_doodle(doodle: Doodle, library_dir=None, use_builtin: bool = True, p
     total, done = sum(len(segs) for _, segs in recognised.values()), 0
     origin = doodle.tracks[0].p[0]  # one origin for the scene: characters keep their relative places
     results, missing, retargeted, chosen = [], {}, {}, {}
+    interacting = {(tr, seg.first, seg.action) for ta, a, tb, b in interaction_pairs(recognised)
+                   for tr, seg in ((ta, a), (tb, b))}
     for track in doodle.tracks:
         tokens, segments = recognised[track.name]
         choices = []
@@ -178,9 +180,15 @@ def compile_doodle(doodle: Doodle, library_dir=None, use_builtin: bool = True, p
             if progress:
                 done += 1
                 progress(done, total)
+        staged = sequenced(track, segments, choices, times, skeleton, rest, scale, terrain, origin, fps, jump_arc,
+                           retime, style, pin)
+        # only interactions read their clips again (their contact frames): the others are let go
+        # before the feet are pinned, so a long track does not hold every styled clip through it
+        choices = [c if (track.name, seg.first, seg.action) in interacting
+                   else replace(c, clip=_Unplayed(c.clip.path, c.clip.retargeted)) for seg, c in zip(segments, choices)]
         chosen[track.name] = choices
-        results.append(animate(track, tokens, segments, choices, times, skeleton, rest, scale, terrain, origin,
-                               fps, jump_arc, retime, style, pin))
+        results.append(finish(track, tokens, segments, staged, times, rest, scale, terrain, origin))
+        del staged
         for seg, c in zip(segments, choices):
             if (c.retargeted or not c.on_skeleton) and seg.action != "unknown":
                 (retargeted if c.retargeted else missing).setdefault(seg.action, []).append(
@@ -253,6 +261,14 @@ def choose(seg, track, actions: Actions, skeleton, rest, given, effort_model, st
                   bool(on_skeleton) and clip.retargeted)
 
 
+@dataclass(frozen=True)
+class _Unplayed:
+    """What is still read of a clip once its track is sequenced (outside interactions)."""
+
+    path: object
+    retargeted: bool
+
+
 def _span(seg, track, choice: Choice):
     """The segment's place on the doodle's timeline with what the trajectory transfer needs
     (flags, execution stage, the clip's own travel direction); and whether it travels."""
@@ -275,27 +291,39 @@ def _span(seg, track, choice: Choice):
 def animate(track, tokens, segments, choices, times, skeleton, rest, scale, terrain, origin, fps, jump_arc,
             retime, style, pin) -> Animation:
     """One track's animation: the path laid on the terrain (§5.2), the chosen clips placed
-    on it and sequenced with transitions (§5.4), feet pinned in their contacts and clamped
-    to the ground."""
-    from retarget.feet import clamp_to_ground, pin_feet
+    on it and sequenced with transitions (§5.4) (:func:`sequenced`), feet pinned in their
+    contacts and clamped to the ground (:func:`finish`)."""
+    staged = sequenced(track, segments, choices, times, skeleton, rest, scale, terrain, origin, fps, jump_arc,
+                       retime, style, pin)
+    return finish(track, tokens, segments, staged, times, rest, scale, terrain, origin)
+
+
+def sequenced(track, segments, choices, times, skeleton, rest, scale, terrain, origin, fps, jump_arc,
+              retime, style, pin) -> "Sequenced":
+    """One track's chosen clips laid on its path and sequenced on the timeline, with what
+    :func:`finish` needs (the clips' contacts where ``pin``)."""
     from retarget.sequence import Placed, contact_states, entry_phase, paced, sequence, stride_scale
     from retarget.timing import flight_times, in_flight, make_room, speed_limit
     from retarget.trajectory import world_path
 
-    placed = [(*_span(seg, track, c), c) for seg, c in zip(segments, choices)]
-    pieces = []
-    for span, travels, choice in placed:
+    pieces, points, known = [], {}, {}
+    for seg, choice in zip(segments, choices):  # one pass per clip while its forward kinematics is fresh
+        span, travels = _span(seg, track, choice)
         clip = choice.clip
         cycles, driven = 0.0, None
         if span.cyclic:
             cycles = max((span.t1 - span.t0) / clip.motion.duration, 1.0)
             if travels and not span.in_place and clip.cycle_length:
-                driven = np.zeros(len(times))  # by the distance along the path, once it is laid
+                driven = np.zeros(1)  # by the distance along the path, once it is laid
         by_hand = retime == "gesture" or (style == "preferred" and choice.style != (0.0, 0.0))
         gesture = gesture_timing(track, span) if by_hand and not span.cyclic else None
         pieces.append(Placed(span, clip.motion, clip.roles["pelvis"], cycles, times, driven, travels,
                              gesture=gesture, contacts=clip.contacts))
-    pieces = _transition_points(pieces, [c.clip for c in choices])
+        _prime(pieces[-1], clip)
+        if len(pieces) > 1:
+            points[len(pieces) - 2] = _transition_point(pieces[-2], pieces[-1], choices[len(pieces) - 2].clip, clip,
+                                                         known)
+    pieces = _transition_points(pieces, [c.clip for c in choices], points, known)
     limits = [speed_limit(pc, _jump_travel(pc.span, track, scale)) for pc in pieces]
     pieces = make_room(pieces, track.t, limits, [c.clip.stages for c in choices])
     pieces = [replace(pc, pace=paced(pc.motion, pc.clip_in, pc.clip_out, pc.span.t1 - pc.span.t0, limit,
@@ -312,8 +340,7 @@ def animate(track, tokens, segments, choices, times, skeleton, rest, scale, terr
     step = np.linalg.norm(np.diff(frame_path[:, [0, 2]], axis=0), axis=1)
     for k, pc in enumerate(pieces):
         if pc.progress is not None:
-            inside = (times[1:] > pc.span.t0) & (times[1:] <= pc.span.t1)
-            progress = np.concatenate([[0.0], np.cumsum(np.where(inside, step, 0.0))])
+            window, progress = walk_progress(times, step, pc.span.t0, pc.span.t1)
             stride = stride_scale(pc.motion, pc.pelvis, progress[-1] / max(pc.span.t1 - pc.span.t0, 1e-9))
             phase = 0.0
             if k > 0 and pieces[k - 1].progress is None:  # entered from a stand or an action
@@ -322,24 +349,63 @@ def animate(track, tokens, segments, choices, times, skeleton, rest, scale, terr
                 phase = entry_phase(before.motion, before.pelvis,
                                     [choices[k - 1].clip.roles[f] for f in ("left_foot", "right_foot")],
                                     at if before.cycles == 0 else 0.0, pc.motion, pc.pelvis, feet)
-            pieces[k] = replace(pc, progress=progress / stride, phase=phase)  # longer strides, faster steps
+            # longer strides, faster steps
+            pieces[k] = replace(pc, times=window, progress=progress / stride, phase=phase)
     motion, transitions = sequence(pieces, times, frame_path[:, [0, 2]], frame_heading, skeleton, fps,
                                    ground_y=frame_path[:, 1])
+    used = {seg.action: (c.clip.path if c.on_skeleton else None) for seg, c in zip(segments, choices)}
+    return Sequenced(motion, transitions, contact_states(pieces, times) if pin else None, spans, frame_path, used,
+                     [c.style for c in choices], [c.effort for c in choices])
+
+
+def finish(track, tokens, segments, staged: "Sequenced", times, rest, scale, terrain, origin) -> Animation:
+    """A track's sequenced motion (:func:`sequenced`) with its feet pinned in their
+    contacts (where it has them: foot pinning on) and clamped to the ground, as an
+    Animation. Needs none of the clips any more: they can be let go first."""
+    from retarget.feet import clamp_to_ground, pin_feet
+
+    motion, frame_path = staged.motion, staged.path
     feet = [rest.roles["left_foot"], rest.roles["right_foot"]]
     standing, sole = _standing(rest, feet)
-    if pin:
-        motion = pin_feet(motion, feet, terrain=terrain, contacts=contact_states(pieces, times),
+    if staged.contacts is not None:
+        motion = pin_feet(motion, feet, terrain=terrain, contacts=staged.contacts,
                           standing=standing, sole=sole, ground_y=frame_path[:, 1])
     motion = clamp_to_ground(motion, terrain)
     ranges = [(int(np.searchsorted(times, sp.t0)), int(min(np.searchsorted(times, sp.t1), len(times) - 1)))
-              for sp in spans]
+              for sp in staged.spans]
     projected = (track.p - origin) * scale
     projected[:, 1] = 0.0 if terrain is None else terrain.height(projected[:, [0, 2]])
-    used = {seg.action: (c.clip.path if c.on_skeleton else None) for seg, c in zip(segments, choices)}
     return Animation(track=track.name, motion=motion, segments=segments, tokens=tokens, path=frame_path,
-                     transitions=transitions, clips=used, roles=rest.roles, terrain=terrain, frame_ranges=ranges,
-                     projected=projected, styles=[c.style for c in choices], efforts=[c.effort for c in choices],
+                     transitions=staged.transitions, clips=staged.clips, roles=rest.roles, terrain=terrain,
+                     frame_ranges=ranges, projected=projected, styles=staged.styles, efforts=staged.efforts,
                      sample_times=track.t, sole=sole)
+
+
+@dataclass(frozen=True, eq=False)
+class Sequenced:
+    """A track's clips sequenced on the timeline (:func:`sequenced`), before its feet are
+    pinned (:func:`finish`): what that needs, without the clips themselves."""
+
+    motion: object  # retarget.skeleton.Motion
+    transitions: list
+    contacts: np.ndarray | None  # (F, feet) where the clips mean the feet to stand; None: no pinning
+    spans: list
+    path: np.ndarray  # (F, 3) the path per frame
+    clips: dict  # action -> clip path (None: the rest pose)
+    styles: list
+    efforts: list
+
+
+def walk_progress(times: np.ndarray, step: np.ndarray, t0: float, t1: float) -> tuple[np.ndarray, np.ndarray]:
+    """The distance (m) travelled along the path from ``t0`` to each output time (``step``:
+    the path's length between each two frames, counted where the later frame is in
+    ``(t0, t1]``), over only the frames around the span: (times, distances), 0 at the
+    first and the whole walk at the last, as constant outside as :func:`numpy.interp` keeps
+    them — the same values as the whole timeline's running sum, in an array the span's size."""
+    lo = max(int(np.searchsorted(times, t0, side="right")) - 1, 0)  # the last frame at or before t0
+    hi = min(int(np.searchsorted(times, t1, side="right")), len(times) - 1)  # the first after t1
+    inside = (times[lo + 1 : hi + 1] > t0) & (times[lo + 1 : hi + 1] <= t1)
+    return times[lo : hi + 1], np.concatenate([[0.0], np.cumsum(np.where(inside, step[lo:hi], 0.0))])
 
 
 def _standing(rest, feet: list[int]) -> tuple[list[float], float]:
@@ -743,17 +809,54 @@ def check_edits(path, qualities: dict, segments: dict) -> None:
             have = f"segments 0–{count - 1}" if count > 1 else ("segment 0" if count else "no segments")
             raise DoodleError(f"{entry}: track {track} has {have} (see report.json's 'index')")
 
-def _transition_points(pieces: list, clips: list) -> list:
-    """Clip ranges between transition points (§5.3.1) for neighbouring one-shot clips."""
+def _prime(piece, clip) -> None:
+    """What later passes over the pieces read of a clip, worked out now, while its forward
+    kinematics is still in the recency cache (each is kept as long as the clip's motion):
+    a one-shot's joint speeds (pacing, room), a distance-driven cycle's travel curve and
+    stances (its phase, strides). Values only: nothing here changes the result."""
+    from retarget.sequence import _frame_speeds, feet_around_pelvis, travel_curve
+
+    if piece.cycles == 0 and piece.progress is None:
+        _frame_speeds(piece.motion)
+    elif piece.progress is not None:
+        travel_curve(piece.motion, piece.pelvis)
+        feet_around_pelvis(piece.motion, piece.pelvis, (clip.roles["left_foot"], clip.roles["right_foot"]))
+
+
+def _transition_point(a, b, clip_a, clip_b, known: dict | None = None):
+    """The transition point (:func:`retarget.transitions.transition_point`) from piece ``a``
+    to piece ``b``, or None where neither is a one-shot or a clip is too short to have one;
+    ``known``: points already found, by clip pair (the same few clips meet many times)."""
     from retarget.transitions import transition_point
 
+    one_shot_a, one_shot_b = a.cycles == 0 and a.progress is None, b.cycles == 0 and b.progress is None
+    if not (one_shot_a or one_shot_b) or a.motion.frames < 4 or b.motion.frames < 4:
+        return None
+    key = (id(a.motion), id(b.motion), a.pelvis, b.pelvis, clip_a.stages, clip_b.stages)
+    if known is not None and key in known:
+        return known[key]
+    point = transition_point(a.motion, b.motion, clip_a.stages, clip_b.stages, a.pelvis, b.pelvis)
+    if known is not None:
+        known[key] = point
+    return point
+
+
+def _transition_points(pieces: list, clips: list, points: dict | None = None, known: dict | None = None) -> list:
+    """Clip ranges between transition points (§5.3.1) for neighbouring one-shot clips
+    (``points``: the point of pieces k and k + 1 at k, where already found; ``known``: by
+    clip pair, see :func:`_transition_point`)."""
     pieces = list(pieces)
+    known = {} if known is None else known
     for k in range(len(pieces) - 1):
         a, b = pieces[k], pieces[k + 1]
-        one_shot_a, one_shot_b = a.cycles == 0 and a.progress is None, b.cycles == 0 and b.progress is None
-        if not (one_shot_a or one_shot_b) or a.motion.frames < 4 or b.motion.frames < 4:
+        if points is not None and k in points:
+            found = points[k]
+        else:
+            found = _transition_point(a, b, clips[k], clips[k + 1], known)
+        if found is None:
             continue
-        i, j = transition_point(a.motion, b.motion, clips[k].stages, clips[k + 1].stages, a.pelvis, b.pelvis)
+        i, j = found
+        one_shot_a, one_shot_b = a.cycles == 0 and a.progress is None, b.cycles == 0 and b.progress is None
         start = a.clip_in / a.motion.frame_time
         if one_shot_a and i - start >= 2:
             pieces[k] = replace(a, clip_out=i * a.motion.frame_time)
@@ -787,14 +890,15 @@ def _compile_skeleton(library, user, clips):
     return skeleton, rest
 
 
-def quality(result: Animation) -> dict:
+def quality(result: Animation, world: tuple | None = None) -> dict:
     """Report metrics: ground penetration, root deviation from the path, transition
-    smoothness. (Sliding feet, pops and the rest are the animation check's: retarget.qa.)"""
+    smoothness. (Sliding feet, pops and the rest are the animation check's: retarget.qa.)
+    ``world``: the motion's forward kinematics, where already worked out."""
     roles = result.roles
     from retarget.skeleton import end_site_positions, forward_kinematics
 
     motion = result.motion
-    world = forward_kinematics(motion)
+    world = forward_kinematics(motion) if world is None else world
     positions = world[0]
     ends = end_site_positions(motion, world)
     points = np.concatenate([positions] + [e[:, None] for e in ends.values()], axis=1)
@@ -804,9 +908,11 @@ def quality(result: Animation) -> dict:
     deviation = float(np.mean(np.linalg.norm(pelvis[:, [0, 2]] - result.path[:, [0, 2]], axis=1)))
     acc = np.linalg.norm(np.diff(positions, n=2, axis=0), axis=2).max(axis=1) / motion.frame_time ** 2
     times = np.arange(motion.frames) * motion.frame_time
+    inner = times[1:-1]
     near = np.zeros(len(acc), dtype=bool)
-    for b in result.transitions:
-        near |= np.abs(times[1:-1] - b) <= 0.15
+    for b in result.transitions:  # only the frames around each transition looked at
+        lo, hi = np.searchsorted(inner, [b - 0.2, b + 0.2])
+        near[lo:hi] |= np.abs(inner[lo:hi] - b) <= 0.15
     smooth = float(acc[near].max() / max(acc[~near].max(), 1e-9)) if near.any() and (~near).any() else None
     return {"ground_penetration_m": round(max(0.0, -lowest), 4),
             "root_deviation_m": round(deviation, 4),

@@ -84,6 +84,7 @@ def compile_scene(file, output, args, progress=None) -> tuple[dict, dict]:
     from doodle.app.report import compiled as compiled_report
     from retarget.bvh import write_bvh
     from retarget.qa import check_scene
+    from retarget.skeleton import forward_kinematics
 
     from retarget.terrain import parse_terrain
 
@@ -110,10 +111,12 @@ def compile_scene(file, output, args, progress=None) -> tuple[dict, dict]:
     if args.edits:
         check_edits(args.edits, qualities, {r.track: len(r.segments) for r in results})
     paths = {r.track: out / f"{r.track}.bvh" for r in results}
+    worlds = {r.track: forward_kinematics(r.motion) for r in results}  # shared by the check and the metrics
     checks = check_scene({r.track: r.motion for r in results}, terrain, contacts=results[0].contacts,
-                         soles={r.track: r.sole for r in results})
-    report = compiled_report(file, args.fps, args.terrain, results, paths, {r.track: quality(r) for r in results},
-                             checks)
+                         soles={r.track: r.sole for r in results}, worlds=worlds)
+    metrics = {r.track: quality(r, worlds[r.track]) for r in results}
+    del worlds
+    report = compiled_report(file, args.fps, args.terrain, results, paths, metrics, checks)
     with atomic_files() as staged:  # every file of the output replaced at the end, or none
         for r in results:
             write_bvh(staged(paths[r.track]), r.motion)
