@@ -170,6 +170,97 @@ def test_real_recordings_have_no_impossible_samples(vive_files):
         assert all(tr.valid.all() for tr in doodle.tracks), path
 
 
+def lost(tmp_path, name, start: float, end: float, fields: dict) -> Path:
+    """The demo doodle with ``fields`` (``{column index: text}``) set on every row whose time
+    is in [start, end) s: tracking lost (``{1: "0", 2: "nan", …}``) or sent far away."""
+    lines = DEMO.read_text().split("\n")
+    changes = {}
+    for lineno, line in enumerate(lines, 1):
+        if line and not line.startswith(("#", "t,")) and start <= float(line.split(",")[0]) < end:
+            changes.update({(lineno, col): text for col, text in fields.items()})
+    assert len(changes) > 10 * len(fields)
+    return edited(tmp_path, name, changes)
+
+
+LOST = {1: "0", **{c: "nan" for c in range(2, 9)}}  # c0.ok = 0, pose unknown
+FAR = {2: "500", 3: "-500"}  # c0.px, c0.py: tracking lost somewhere far away
+
+
+@pytest.mark.parametrize("fields, span, extra", [
+    (LOST, (3.0, 3.3), []),  # a gap within --max-gap (0.5 s)
+    (FAR, (3.0, 3.3), []),
+    (LOST, (0.0, 1.0), []),  # untracked at the ends: the nearest tracked pose
+    (LOST, (7.0, 99.0), []),
+    (LOST, (3.0, 5.0), ["--max-gap", "3"]),  # a long gap the user asks to repair
+    (FAR, (3.0, 5.0), ["--max-gap", "3"]),
+])
+def test_lost_tracking_compiles_as_repaired(tmp_path, capsys, fields, span, extra):
+    """Lost tracking — flagged, or positions far beyond any tracked space — is repaired for
+    the whole compile as the Segmenter repairs it (the path and the Effort read the poses
+    too: they used to get the NaN and stop at "internal error: ValueError: `y` must contain
+    only finite values")."""
+    path = lost(tmp_path, "lost.doodle", *span, fields)
+    code, _, err = cli(capsys, "compile", path, "-o", tmp_path / "out", *extra)
+    assert code == 0, err
+    assert not [e for e in err if "error" in e or "Traceback" in e], err
+    if fields is FAR:
+        assert len(err) == 1 and err[0].startswith(f"doodle: warning: {path}:") and "track c0" in err[0] \
+            and "treated as lost tracking" in err[0], err
+    assert (tmp_path / "out" / "c0.bvh").stat().st_size > 0
+
+
+@pytest.mark.parametrize("fields", [LOST, FAR])
+def test_a_long_loss_of_tracking_is_refused_by_track_and_time_leaving_the_output(tmp_path, capsys, fields):
+    """Two seconds lost (beyond --max-gap): one line naming the file, track and time span,
+    exit 1, and the output of an earlier compile (and the user's own files) left as they were."""
+    out = tmp_path / "out"
+    assert cli(capsys, "compile", DEMO, "-o", out)[0] == 0
+    (out / "mine.txt").write_text("mine\n")
+    before = {f.name: f.read_bytes() for f in out.iterdir()}
+    path = lost(tmp_path, "lost.doodle", 3.0, 5.0, fields)
+    code, _, err = cli(capsys, "compile", path, "-o", out)
+    line = err[-1]
+    assert code == 1 and line.startswith(f"doodle: error: {path}: track c0 lost tracking for 2.01 s (3.00-5.01 s), "
+                                         "more than the 0.5 s that are repaired"), err
+    assert not [e for e in err if "Traceback" in e or "internal error" in e], err
+    assert {f.name: f.read_bytes() for f in out.iterdir()} == before
+
+
+def test_effort_classify_reads_repaired_poses(tmp_path, capsys):
+    """``doodle laban classify`` reads the hand's poses too: a short loss is repaired; a long
+    one is that file's error, and the next file is still classified."""
+    short = lost(tmp_path, "short.doodle", 3.0, 3.3, LOST)
+    code, out, err = cli(capsys, "laban", "classify", short)
+    assert code == 0 and not err and "Walk" in out, err
+    long = lost(tmp_path, "long.doodle", 3.0, 5.0, LOST)
+    code, out, err = cli(capsys, "laban", "classify", long, DEMO)
+    assert code == 1 and err == [f"doodle: error: {long}: track c0 lost tracking for 2.01 s (3.00-5.01 s), more than "
+                                 "the 0.5 s that are repaired; trim the doodle or raise --max-gap"], err
+    assert str(DEMO) in out
+
+
+def test_repaired_fills_every_pose_and_keeps_the_flags():
+    from doodle.core.model import Doodle, Track
+    from doodle.input.repair import fill_gaps, repaired
+
+    t = np.arange(100) / 90.0
+    p = np.column_stack([np.sin(t), np.cos(t), t])
+    q = np.tile([0.0, 0.0, 0.0, 1.0], (100, 1))
+    valid = np.ones(100, bool)
+    whole = Doodle((Track("a", t, p, q, valid),), 90.0)
+    assert repaired(whole, 0.5) is whole
+    valid = valid.copy()
+    valid[[0, 1, 40, 41, 42, 99]] = False
+    holey = Track("a", t, np.where(valid[:, None], p, np.nan), np.where(valid[:, None], q, np.nan), valid)
+    fixed = repaired(Doodle((holey,), 90.0), 0.5).tracks[0]
+    assert np.isfinite(fixed.p).all() and np.isfinite(fixed.q).all()
+    assert (fixed.valid == valid).all()
+    expected = fill_gaps("a", t, holey.p, holey.q, valid, 0.5)
+    assert np.array_equal(fixed.p, expected[0]) and np.array_equal(fixed.q, expected[1])
+    again = fill_gaps("a", t, fixed.p, fixed.q, valid, 0.5)  # the Segmenter repairs it again: no change
+    assert np.array_equal(again[0], fixed.p) and np.array_equal(again[1], fixed.q)
+
+
 # --------------------------------------------------------------------------- CSV cut off
 
 

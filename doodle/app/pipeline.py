@@ -14,6 +14,7 @@ import numpy as np
 from doodle.core import quat
 from doodle.core.errors import DoodleError
 from doodle.core.model import Doodle
+from doodle.input.repair import repaired
 from doodle.input.segmenter import SegmenterParams
 from grammar.library import Compiled, compile_library
 from doodle.app.placement import interaction_pairs
@@ -145,7 +146,10 @@ def compile_doodle(doodle: Doodle, library_dir=None, use_builtin: bool = True, p
                    progress=None, cache: bool = True) -> list[Animation]:
     """Every track of a doodle turned into an animation on one timeline.
 
-    Stages: the library loaded once (:func:`load_for_compile`); the scene recognised and
+    Stages: lost tracking repaired as the Segmenter repairs it (:func:`doodle.input.repair.repaired`:
+    the path, placement and Effort read the poses themselves; a gap longer than
+    ``params.max_gap`` is a DoodleError naming the track and time span); the library loaded
+    once (:func:`load_for_compile`); the scene recognised and
     its characters placed for their interactions (:func:`scene`); per track, a clip chosen
     and stylised for each segment (:func:`choose`), the path laid on the terrain, the clips
     sequenced with transitions, feet pinned and clamped (:func:`animate`); contacts between
@@ -161,6 +165,7 @@ def compile_doodle(doodle: Doodle, library_dir=None, use_builtin: bool = True, p
     ``cache``: the library's analysed clips and automata read from (and kept in) the disk
     cache (:func:`load_for_compile`) — the same results either way.
     """
+    doodle = repaired(doodle, params.max_gap)
     actions = load_for_compile(library_dir, use_builtin, cache)
     scale = CHARACTER_HEIGHT / PROP_SIZE if scale is None else scale
     doodle, recognised = scene(doodle, actions, params, threshold, scale)

@@ -19,7 +19,9 @@ Documented repair for lost tracking (``valid == False``):
   (the figurine reads as still there).
 
 :func:`fill_gaps` is the batch form; :class:`GapFiller` the streaming one, which holds
-untracked samples until tracking returns and then releases them, with identical values.
+untracked samples until tracking returns and then releases them, with identical values;
+:func:`repaired` applies :func:`fill_gaps` to every track of a doodle, for the stages after
+the Segmenter that read the poses themselves (the compiler's path, placement and Effort).
 """
 
 from __future__ import annotations
@@ -30,6 +32,7 @@ import numpy as np
 
 from doodle.core import quat
 from doodle.core.errors import DoodleError, where
+from doodle.core.model import Doodle, Track
 
 MAX_RADIUS = 100.0  # m from the origin, per axis: ten times the largest tracked room
 MAX_SPEED = 50.0  # m/s between samples: over twice the fastest step of real recordings
@@ -165,6 +168,24 @@ def fill_gaps(name, t, p, q, valid, max_gap: float, source: str = "<memory>"):
             raise _gap_error(name, source, t[a], t[b], max_gap)
         p[s : e + 1], q[s : e + 1] = _interpolate(t[a], p[a], q[a], t[b], p[b], q[b], t[s : e + 1])
     return p, q
+
+
+def repaired(doodle: Doodle, max_gap: float) -> Doodle:
+    """``doodle`` with every track's lost samples repaired (:func:`fill_gaps`), after the
+    checks of :func:`check_samples`: every pose finite, ``valid`` kept as recorded (repairing
+    again gives the same poses). The doodle itself when nothing was lost. Raises DoodleError
+    naming the file, track and time span of a gap longer than ``max_gap``."""
+    tracks = []
+    for tr in doodle.tracks:
+        check_samples(tr.name, tr.t, tr.p, tr.q, tr.valid, doodle.source)
+        if tr.valid.all():
+            tracks.append(tr)
+            continue
+        p, q = fill_gaps(tr.name, tr.t, tr.p, tr.q, tr.valid, max_gap, doodle.source)
+        tracks.append(Track(tr.name, tr.t, p, q, tr.valid, tr.role, tr.serial))
+    if all(a is b for a, b in zip(tracks, doodle.tracks)):
+        return doodle
+    return Doodle(tuple(tracks), doodle.rate, doodle.device, doodle.source, doodle.meta)
 
 
 class GapFiller:

@@ -249,6 +249,7 @@ def cmd_classify(args) -> int:
     from doodle.input.loader import load
     from doodle.app.pipeline import effort_quality
     from grammar.recognizer import load_actions, recognize
+    from doodle.input.repair import repaired
     from doodle.input.segmenter import SegmenterParams
 
     model = load_model(args.model)
@@ -256,7 +257,7 @@ def cmd_classify(args) -> int:
     failed = 0
     for path in args.files:
         try:
-            doodle = load(path)
+            doodle = repaired(load(path), SegmenterParams().max_gap)  # Effort reads the poses
         except DoodleError as e:
             print(f"doodle: error: {e}", file=sys.stderr)
             failed += 1
