@@ -69,7 +69,7 @@ def dtw_costs(x: np.ndarray, templates: np.ndarray) -> np.ndarray:
     k, m, _ = templates.shape
     # (b, k, n, m) squared distances, as |x|² + |t|² − 2 x·t
     cost = ((xb ** 2).sum(-1)[:, None, :, None] + (templates ** 2).sum(-1)[None, :, None, :]
-            - 2.0 * np.einsum("bnd,kmd->bknm", xb, templates))
+            - 2.0 * np.matmul(xb[:, None], templates.transpose(0, 2, 1)[None]))
     cost = np.maximum(cost, 0.0).reshape(b * k, n, m)
     row = np.cumsum(cost[:, 0, :], axis=1)
     inf = np.full((b * k, 1), np.inf)
@@ -344,10 +344,11 @@ def choose_turn(shapes: list, owner: np.ndarray) -> float:
     for turn in TURNS:
         feats = np.array([features(paths[j], quats[j] if turn > 0 else None, turn)
                           for _, paths, quats in shapes for j in range(len(paths))])
+        everyone = np.concatenate([dtw_costs(feats[k:k + CHUNK // len(feats) + 1], feats)
+                                   for k in range(0, len(feats), CHUNK // len(feats) + 1)])  # (K, K)
         right, ratios = 0, []
         for i in range(len(feats)):
-            costs = dtw_costs(feats[i], np.delete(feats, i, axis=0))
-            rest = np.delete(owner, i)
+            costs, rest = np.delete(everyone[i], i), np.delete(owner, i)
             own, other = costs[rest == owner[i]], costs[rest != owner[i]]
             right += int(rest[int(np.argmin(costs))] == owner[i])
             if len(own) and len(other):
