@@ -26,7 +26,7 @@ before the "per-frame work" changes the 60 s doodle took 1.6 s (182 MB), 10 min 
 (5.8 GB: an F × F matrix for the knee's nearest bent frame) and the hour failed with a
 MemoryError (95 GiB asked) after 83 s; after them 1.7 s (131 MB), 9.1 s (280 MB) and 54 s
 (982 MB). The outputs (BVH and report) are byte-identical.
-""""""
+"""
 
 from __future__ import annotations
 
