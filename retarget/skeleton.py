@@ -158,8 +158,8 @@ def _kinematics(motion: Motion) -> tuple[np.ndarray, np.ndarray]:
         pos, rot = _kinematics_block(motion.translations[a:b], motion.rotations[a:b], levels)
         positions[a:b] = pos.transpose(2, 1, 0)
         rotations[a:b] = rot.transpose(2, 1, 0)
-    norm = np.linalg.norm(rotations, axis=-1, keepdims=True)
-    return positions, rotations / norm
+        rotations[a:b] /= np.linalg.norm(rotations[a:b], axis=-1, keepdims=True)  # in place, block by block
+    return positions, rotations
 
 
 def _kinematics_block(translations: np.ndarray, rotations: np.ndarray, levels) -> tuple[np.ndarray, np.ndarray]:

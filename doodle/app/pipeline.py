@@ -178,10 +178,10 @@ def compile_doodle(doodle: Doodle, library_dir=None, use_builtin: bool = True, p
                    for tr, seg in ((ta, a), (tb, b))}
     for track in doodle.tracks:
         tokens, segments = recognised[track.name]
-        choices = []
+        choices, styled = [], {}  # styled: one stylised clip per distinct (clip, quality), shared by its segments
         for index, seg in enumerate(segments):
             choices.append(choose(seg, track, actions, skeleton, rest, _quality_of(qualities, track.name, index),
-                                  effort_model, style))
+                                  effort_model, style, styled))
             if progress:
                 done += 1
                 progress(done, total)
@@ -235,14 +235,17 @@ def scene(doodle: Doodle, actions: Actions, params: SegmenterParams, threshold: 
     return doodle, recognised
 
 
-def choose(seg, track, actions: Actions, skeleton, rest, given, effort_model, style: str) -> Choice:
+def choose(seg, track, actions: Actions, skeleton, rest, given, effort_model, style: str,
+           styled: dict | None = None) -> Choice:
     """The clip a segment plays on the output skeleton (the rest pose where its action has
     none): the first that travels the way the action means (a side step sideways, relative
     to its facing; :func:`retarget.clips.fits`) — the library's own before a retargeted
     built-in one — stylised by the quality ``given`` or, without one, the one the effort
     model recognises in the hand's motion (a cycle is never retimed: its pace is the
     hand's travel; a jump's timing is left as it is — its flight lasts what gravity gives it
-    — and it takes the quality in its poses)."""
+    — and it takes the quality in its poses). ``styled``: stylised clips already made, by
+    clip and quality (filled here; segments asking for the same share one — a long doodle
+    asks for the same few again and again, and clips are never changed in place)."""
     from retarget.clips import fits
 
     library = actions.library
@@ -259,10 +262,18 @@ def choose(seg, track, actions: Actions, skeleton, rest, given, effort_model, st
     lt, lw = given or (0.0, 0.0)
     if action.cyclic:
         lt = 0.0
-    styled = bool((lt or lw) and on_skeleton)
-    if styled:
-        clip = _stylized(clip, lt, lw, "preferred" if action.jumping else style, action.cyclic)
-    return Choice(clip, action, bool(on_skeleton), (lt, lw) if styled else (0.0, 0.0), effort,
+    styling = bool((lt or lw) and on_skeleton)
+    if styling:
+        how = "preferred" if action.jumping else style
+        if styled is None:
+            clip = _stylized(clip, lt, lw, how, action.cyclic)
+        else:
+            key = (id(clip), repr(lt), repr(lw), how, action.cyclic)  # (repr: -0.0 is not 0.0); the neutral
+            # clip is kept beside its stylisation, so its id stays its own
+            if key not in styled:
+                styled[key] = (clip, _stylized(clip, lt, lw, how, action.cyclic))
+            clip = styled[key][1]
+    return Choice(clip, action, bool(on_skeleton), (lt, lw) if styling else (0.0, 0.0), effort,
                   bool(on_skeleton) and clip.retargeted)
 
 
