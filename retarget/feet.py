@@ -22,7 +22,7 @@ import numpy as np
 from doodle.core import quat
 from doodle.core.profiles import min_jerk
 from retarget.analysis import foot_contacts
-from retarget.skeleton import Motion, forward_kinematics
+from retarget.skeleton import FK_BLOCK, Motion, forward_kinematics, kinematics_of
 
 
 def _unit(v: np.ndarray) -> np.ndarray:
@@ -144,9 +144,20 @@ def pin_feet(motion: Motion, feet: list[int], fade: int = 3, terrain=None, conta
     where a leg cannot reach its spot the pelvis is lowered: its height comes from the
     ground under the feet, not under the root (``ground_y``, per frame: the ground the root
     was put on). Pins fade in and out over ``fade`` frames."""
-    original = forward_kinematics(motion)[0]
+    legs = {0}  # the joints read here: root, each foot's subtree (toes, end sites), knee, hip and pelvis
+    for a in feet:
+        legs.update(motion.skeleton.subtree(a))
+        j = a
+        for _ in range(3):
+            j = int(motion.skeleton.parents[j])
+            legs.add(j % len(motion.skeleton))  # (a root hip's parent is read as joint -1)
+            if j < 0:
+                break
     if contacts is None:
+        original = forward_kinematics(motion)[0]
         contacts = planted(motion, feet, original, terrain)
+    else:  # only the legs' positions: a long motion's (F, J, 7) never made
+        original = kinematics_of(motion, legs)[0]
     rise = None
     if terrain is not None:  # the ground under each foot relative to the ground under the root,
         # but not in the air (both feet off: the feet go with the body)
@@ -165,7 +176,7 @@ def pin_feet(motion: Motion, feet: list[int], fade: int = 3, terrain=None, conta
         weights.append(weight)
         helds.append(held)
     motion = _lower_to_reach(motion, original, feet, targets, weights)
-    world = forward_kinematics(motion)
+    world = kinematics_of(motion, legs)
     front = _front(motion, world[0], feet)
     rots = None  # the legs share one copy of the rotations (each changes only its own joints)
     for k, ankle in enumerate(feet):
@@ -180,7 +191,7 @@ def pin_feet(motion: Motion, feet: list[int], fade: int = 3, terrain=None, conta
         motion = _soles_on_ground(motion, original, feet, terrain, ground_y)
     del original
     world = None  # freed before the next is made
-    world = forward_kinematics(motion)
+    world = kinematics_of(motion, legs)
     rots = None
     for k, ankle in enumerate(feet):  # a standing foot's lowest point (heel, toes) on the ground
         knee = int(motion.skeleton.parents[ankle])
@@ -381,11 +392,18 @@ def clamp_to_ground(motion: Motion, terrain=None) -> Motion:
     from retarget.analysis import pelvis_of
     from retarget.skeleton import end_site_positions
 
-    world = forward_kinematics(motion)
-    body = world[0] if pelvis_of(motion.skeleton) == 0 else world[0][:, 1:]  # not a helper root on the floor
-    points = np.concatenate([body] + [end[:, None] for end in end_site_positions(motion, world).values()], axis=1)
-    ground = 0.0 if terrain is None else terrain.height(points[:, :, [0, 2]])
-    lift = np.maximum(0.0, np.max(ground - points[:, :, 1], axis=1))
+    helper = pelvis_of(motion.skeleton) != 0  # a helper root on the floor does not count
+
+    def below(part: Motion) -> np.ndarray:  # (n,) how far each frame's lowest point is under the ground
+        world = forward_kinematics(part)
+        body = world[0][:, 1:] if helper else world[0]
+        points = np.concatenate([body] + [end[:, None] for end in end_site_positions(part, world).values()], axis=1)
+        ground = 0.0 if terrain is None else terrain.height(points[:, :, [0, 2]])
+        return np.maximum(0.0, np.max(ground - points[:, :, 1], axis=1))
+
+    # frame by frame, so in blocks of frames: a long motion's forward kinematics is never whole
+    lift = np.concatenate([below(motion.slice(a, a + FK_BLOCK)) for a in range(0, motion.frames, FK_BLOCK)]
+                          or [np.zeros(0)])
     if not lift.any():
         return motion
     lift = np.maximum(gaussian_filter1d(maximum_filter1d(lift, 5), 1.5), lift)

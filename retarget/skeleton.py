@@ -162,6 +162,43 @@ def _kinematics(motion: Motion) -> tuple[np.ndarray, np.ndarray]:
     return positions, rotations
 
 
+class Joints:
+    """World positions or rotations (:func:`kinematics_of`) of some joints only, read as the
+    whole (F, J, ·) array is read: ``a[:, j]`` and ``a[:, j, k]`` (any other joint is a KeyError)."""
+
+    def __init__(self, columns: dict, joints: int):
+        self.columns = columns  # joint -> (F, ·)
+        self.joints = joints  # J: a negative joint counts from the end, as in the array
+
+    def __getitem__(self, key):
+        rows, joint, *rest = key
+        if rows != slice(None):
+            raise IndexError("Joints are read a whole joint at a time: a[:, j]")
+        column = self.columns[int(joint) % self.joints]
+        return column[(slice(None), *rest)] if rest else column
+
+
+def kinematics_of(motion: Motion, joints) -> tuple[Joints, Joints]:
+    """:func:`forward_kinematics` of ``joints`` only (their world positions and rotations,
+    bit for bit the same), worked out in blocks of frames: a long motion's foot pinning
+    needs its legs', not the (F, J, 7) of every joint."""
+    joints = sorted({int(j) for j in joints})
+    f, j = motion.frames, len(motion.skeleton)
+    positions = {k: np.empty((f, 3)) for k in joints}
+    rotations = {k: np.empty((f, 4)) for k in joints}
+    levels = _levels(motion.skeleton)
+    for a in range(0, f, FK_BLOCK):
+        b = min(a + FK_BLOCK, f)
+        pos, rot = _kinematics_block(motion.translations[a:b], motion.rotations[a:b], levels)
+        block = np.empty((b - a, j, 4))
+        block[:] = rot.transpose(2, 1, 0)
+        block /= np.linalg.norm(block, axis=-1, keepdims=True)  # as _kinematics normalises
+        for k in joints:
+            positions[k][a:b] = pos[:, k].T
+            rotations[k][a:b] = block[:, k]
+    return Joints(positions, j), Joints(rotations, j)
+
+
 def _kinematics_block(translations: np.ndarray, rotations: np.ndarray, levels) -> tuple[np.ndarray, np.ndarray]:
     """Unnormalised world positions (3, J, F) and rotations (4, J, F) of frames (F, J, ·)."""
     local_t = np.ascontiguousarray(translations.transpose(2, 1, 0))
