@@ -189,10 +189,12 @@ def pin_feet(motion: Motion, feet: list[int], fade: int = 3, terrain=None, conta
     motion = motion if rots is None else replace(motion, rotations=rots)
     if terrain is not None:  # the foot laid along the slope under it
         motion = _soles_on_ground(motion, original, feet, terrain, ground_y)
+        rots = motion.rotations
     del original
     world = None  # freed before the next is made
     world = kinematics_of(motion, legs)
-    rots = None
+    # a copy made here is changed in place (_leg_ik reads only rots and world of it), the caller's never
+    rots = rots if rots is not None and rots is motion.rotations else None
     for k, ankle in enumerate(feet):  # a standing foot's lowest point (heel, toes) on the ground
         knee = int(motion.skeleton.parents[ankle])
         hip = int(motion.skeleton.parents[knee]) if knee >= 0 else -1
