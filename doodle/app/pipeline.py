@@ -192,6 +192,8 @@ def compile_doodle(doodle: Doodle, library_dir=None, use_builtin: bool = True, p
         choices = [c if (track.name, seg.first, seg.action) in interacting
                    else replace(c, clip=_Unplayed(c.clip.path, c.clip.retargeted)) for seg, c in zip(segments, choices)]
         chosen[track.name] = choices
+        styled.clear()  # (an interaction's clip stays in its choice)
+        _release_heap()
         results.append(finish(track, tokens, segments, staged, times, rest, scale, terrain, origin))
         del staged
         for seg, c in zip(segments, choices):
@@ -211,6 +213,17 @@ def compile_doodle(doodle: Doodle, library_dir=None, use_builtin: bool = True, p
     contacts = _contacts(results, recognised, {i.name: i for i in actions.library.interactions}, chosen)
     _apart(results, recognised, contacts)
     return [replace(r, contacts=contacts) for r in results]
+
+
+def _release_heap() -> None:
+    """The heap freed so far handed back to the system (glibc's ``malloc_trim``; elsewhere
+    nothing): a long track's clips are many small arrays, and the peak comes after them."""
+    import ctypes
+
+    try:
+        ctypes.CDLL("libc.so.6").malloc_trim(0)
+    except (OSError, AttributeError):
+        pass
 
 
 def scene(doodle: Doodle, actions: Actions, params: SegmenterParams, threshold: float, scale: float):
@@ -917,12 +930,18 @@ def quality(result: Animation, world: tuple | None = None) -> dict:
     world = forward_kinematics(motion) if world is None else world
     positions = world[0]
     ends = end_site_positions(motion, world)
-    points = np.concatenate([positions] + [e[:, None] for e in ends.values()], axis=1)
-    ground = 0.0 if result.terrain is None else result.terrain.height(points[:, :, [0, 2]])
-    lowest = float(np.min(points[:, :, 1] - ground))
+    block = 4096  # frames at once: a long motion's (F, points, 3) is never copied whole
+
+    def below(a: int) -> float:  # the lowest point's height above the ground in frames [a, a + block)
+        points = np.concatenate([positions[a:a + block]] + [e[a:a + block, None] for e in ends.values()], axis=1)
+        ground = 0.0 if result.terrain is None else result.terrain.height(points[:, :, [0, 2]])
+        return float(np.min(points[:, :, 1] - ground))
+
+    lowest = min(below(a) for a in range(0, motion.frames, block))
     pelvis = positions[:, roles["pelvis"]]
     deviation = float(np.mean(np.linalg.norm(pelvis[:, [0, 2]] - result.path[:, [0, 2]], axis=1)))
-    acc = np.linalg.norm(np.diff(positions, n=2, axis=0), axis=2).max(axis=1) / motion.frame_time ** 2
+    acc = np.concatenate([np.linalg.norm(np.diff(positions[a:a + block + 2], n=2, axis=0), axis=2).max(axis=1)
+                          for a in range(0, max(motion.frames - 2, 0), block)] or [np.zeros(0)]) / motion.frame_time ** 2
     times = np.arange(motion.frames) * motion.frame_time
     inner = times[1:-1]
     near = np.zeros(len(acc), dtype=bool)
