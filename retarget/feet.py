@@ -128,7 +128,8 @@ LOWEST = 0.2  # m: the most the pelvis is lowered for a foot on lower ground (a 
 
 
 def pin_feet(motion: Motion, feet: list[int], fade: int = 3, terrain=None, contacts: np.ndarray | None = None,
-             standing: list[float] | None = None, sole: float = 0.0, ground_y: np.ndarray | None = None) -> Motion:
+             standing: list[float] | None = None, sole: float = 0.0, ground_y: np.ndarray | None = None,
+             in_place: bool = False) -> Motion:
     """The motion with each foot held still over each of its contact intervals.
 
     ``contacts`` (F, len(feet)): where the foot stands — the sequenced clips' own contacts
@@ -143,7 +144,8 @@ def pin_feet(motion: Motion, feet: list[int], fade: int = 3, terrain=None, conta
     root (a swinging foot clears a rise, a standing one stands on its own ground), and
     where a leg cannot reach its spot the pelvis is lowered: its height comes from the
     ground under the feet, not under the root (``ground_y``, per frame: the ground the root
-    was put on). Pins fade in and out over ``fade`` frames."""
+    was put on). Pins fade in and out over ``fade`` frames. ``in_place``: ``motion``'s own
+    arrays are changed rather than copied (a motion nothing else holds: just sequenced)."""
     legs = {0}  # the joints read here: root, each foot's subtree (toes, end sites), knee, hip and pelvis
     for a in feet:
         legs.update(motion.skeleton.subtree(a))
@@ -175,7 +177,7 @@ def pin_feet(motion: Motion, feet: list[int], fade: int = 3, terrain=None, conta
         targets.append(target)
         weights.append(weight)
         helds.append(held)
-    motion = _lower_to_reach(motion, original, feet, targets, weights)
+    motion = _lower_to_reach(motion, original, feet, targets, weights, in_place)
     world = kinematics_of(motion, legs)
     front = _front(motion, world[0], feet)
     rots = None  # the legs share one copy of the rotations (each changes only its own joints)
@@ -184,7 +186,7 @@ def pin_feet(motion: Motion, feet: list[int], fade: int = 3, terrain=None, conta
         hip = int(motion.skeleton.parents[knee]) if knee >= 0 else -1
         if hip < 0 or not weights[k].any():
             continue
-        rots = motion.rotations.copy() if rots is None else rots
+        rots = (motion.rotations if in_place else motion.rotations.copy()) if rots is None else rots
         _leg_ik(rots, motion, hip, knee, ankle, targets[k], weights[k], world=world, front=front)
     motion = motion if rots is None else replace(motion, rotations=rots)
     if terrain is not None:  # the foot laid along the slope under it
@@ -195,6 +197,7 @@ def pin_feet(motion: Motion, feet: list[int], fade: int = 3, terrain=None, conta
     world = kinematics_of(motion, legs)
     # a copy made here is changed in place (_leg_ik reads only rots and world of it), the caller's never
     rots = rots if rots is not None and rots is motion.rotations else None
+    rots = motion.rotations if in_place and rots is None else rots
     for k, ankle in enumerate(feet):  # a standing foot's lowest point (heel, toes) on the ground
         knee = int(motion.skeleton.parents[ankle])
         hip = int(motion.skeleton.parents[knee]) if knee >= 0 else -1
@@ -360,7 +363,8 @@ def _smooth(x: np.ndarray) -> np.ndarray:
     return x * x * (3 - 2 * x)
 
 
-def _lower_to_reach(motion: Motion, positions: np.ndarray, feet: list[int], targets: list, weights: list) -> Motion:
+def _lower_to_reach(motion: Motion, positions: np.ndarray, feet: list[int], targets: list, weights: list,
+                    in_place: bool = False) -> Motion:
     """The root lowered, eased, wherever a pinned foot's spot is out of its straight leg's
     reach (a foot on ground lower than the root's, a style that lifted the body)."""
     from scipy.ndimage import gaussian_filter1d, maximum_filter1d
@@ -380,15 +384,16 @@ def _lower_to_reach(motion: Motion, positions: np.ndarray, feet: list[int], targ
     if not need.any():
         return motion
     need = np.maximum(gaussian_filter1d(maximum_filter1d(np.minimum(need, LOWEST), 5), 1.5), np.minimum(need, LOWEST))
-    trans = motion.translations.copy()
+    trans = motion.translations if in_place else motion.translations.copy()
     trans[:, 0, 1] -= need
     return replace(motion, translations=trans)
 
 
-def clamp_to_ground(motion: Motion, terrain=None) -> Motion:
+def clamp_to_ground(motion: Motion, terrain=None, in_place: bool = False) -> Motion:
     """The motion raised, frame by frame, so no joint or End Site of the body (a helper root
     above the pelvis does not count) is below the ground (``terrain``; flat y = 0 when
-    None); the lift is eased in and out over a few frames."""
+    None); the lift is eased in and out over a few frames. ``in_place``: ``motion``'s
+    translations are changed rather than copied (a motion nothing else holds)."""
     from scipy.ndimage import gaussian_filter1d, maximum_filter1d
 
     from retarget.analysis import pelvis_of
@@ -409,6 +414,6 @@ def clamp_to_ground(motion: Motion, terrain=None) -> Motion:
     if not lift.any():
         return motion
     lift = np.maximum(gaussian_filter1d(maximum_filter1d(lift, 5), 1.5), lift)
-    trans = motion.translations.copy()
+    trans = motion.translations if in_place else motion.translations.copy()
     trans[:, 0, 1] += lift
     return replace(motion, translations=trans)

@@ -283,7 +283,8 @@ def sequence(placed: list[Placed], times: np.ndarray, path_xz: np.ndarray, headi
         weight[idx] += w
     weight = np.maximum(weight, 1e-9)
     trans /= weight[:, None, None]
-    rots /= np.linalg.norm(rots, axis=-1, keepdims=True)
+    for a in range(0, frames, 4096):  # normalised in blocks: no whole-timeline temporaries
+        rots[a:a + 4096] /= np.linalg.norm(rots[a:a + 4096], axis=-1, keepdims=True)
     return Motion(skeleton, trans, rots, 1.0 / fps), boundaries
 
 

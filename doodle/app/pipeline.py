@@ -390,7 +390,9 @@ def sequenced(track, segments, choices, times, skeleton, rest, scale, terrain, o
 def finish(track, tokens, segments, staged: "Sequenced", times, rest, scale, terrain, origin) -> Animation:
     """A track's sequenced motion (:func:`sequenced`) with its feet pinned in their
     contacts (where it has them: foot pinning on) and clamped to the ground, as an
-    Animation. Needs none of the clips any more: they can be let go first."""
+    Animation. Needs none of the clips any more: they can be let go first. The sequenced
+    motion's arrays are changed in place (nothing else holds them: a long track's timeline is
+    not copied twice more)."""
     from retarget.feet import clamp_to_ground, pin_feet
 
     motion, frame_path = staged.motion, staged.path
@@ -398,8 +400,8 @@ def finish(track, tokens, segments, staged: "Sequenced", times, rest, scale, ter
     standing, sole = _standing(rest, feet)
     if staged.contacts is not None:
         motion = pin_feet(motion, feet, terrain=terrain, contacts=staged.contacts,
-                          standing=standing, sole=sole, ground_y=frame_path[:, 1])
-    motion = clamp_to_ground(motion, terrain)
+                          standing=standing, sole=sole, ground_y=frame_path[:, 1], in_place=True)
+    motion = clamp_to_ground(motion, terrain, in_place=True)
     ranges = [(int(np.searchsorted(times, sp.t0)), int(min(np.searchsorted(times, sp.t1), len(times) - 1)))
               for sp in staged.spans]
     projected = (track.p - origin) * scale
