@@ -40,7 +40,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from retarget.analysis import guess_roles
-from retarget.skeleton import Motion, end_site_positions, forward_kinematics
+from retarget.skeleton import Motion, end_site_positions, forward_kinematics, kinematics_of
 
 
 @dataclass(frozen=True)
@@ -385,6 +385,14 @@ def reaction_onset(motion: Motion, joint: int, first: int, last: int, limits: Li
     while k > 0 and speed[k - 1] > limits.stir:
         k -= 1
     return first + k
+
+
+def check_world(motion: Motion) -> tuple:
+    """The forward kinematics :func:`check` and :func:`check_scene` read (and the report's
+    metrics): every joint's position, but the rotations only of the pelvis and the joints
+    with End Sites (a long motion's rotations of every joint are never made)."""
+    joints = {0, guess_roles(motion.skeleton).get("pelvis", 0), *motion.skeleton.end_sites}
+    return kinematics_of(motion, joints, every_position=True)
 
 
 def check_scene(motions: dict, terrain=None, limits: Limits = Limits(), ground: float | None = 0.0,

@@ -178,13 +178,15 @@ class Joints:
         return column[(slice(None), *rest)] if rest else column
 
 
-def kinematics_of(motion: Motion, joints) -> tuple[Joints, Joints]:
+def kinematics_of(motion: Motion, joints, every_position: bool = False) -> tuple:
     """:func:`forward_kinematics` of ``joints`` only (their world positions and rotations,
     bit for bit the same), worked out in blocks of frames: a long motion's foot pinning
-    needs its legs', not the (F, J, 7) of every joint."""
+    needs its legs', not the (F, J, 7) of every joint. ``every_position``: the positions
+    of every joint (the whole (F, J, 3) array), the rotations still only of ``joints``."""
     joints = sorted({int(j) for j in joints})
     f, j = motion.frames, len(motion.skeleton)
-    positions = {k: np.empty((f, 3)) for k in joints}
+    everywhere = np.empty((f, j, 3)) if every_position else None
+    positions = {} if every_position else {k: np.empty((f, 3)) for k in joints}
     rotations = {k: np.empty((f, 4)) for k in joints}
     levels = _levels(motion.skeleton)
     for a in range(0, f, FK_BLOCK):
@@ -193,10 +195,13 @@ def kinematics_of(motion: Motion, joints) -> tuple[Joints, Joints]:
         block = np.empty((b - a, j, 4))
         block[:] = rot.transpose(2, 1, 0)
         block /= np.linalg.norm(block, axis=-1, keepdims=True)  # as _kinematics normalises
+        if every_position:
+            everywhere[a:b] = pos.transpose(2, 1, 0)
         for k in joints:
-            positions[k][a:b] = pos[:, k].T
+            if not every_position:
+                positions[k][a:b] = pos[:, k].T
             rotations[k][a:b] = block[:, k]
-    return Joints(positions, j), Joints(rotations, j)
+    return everywhere if every_position else Joints(positions, j), Joints(rotations, j)
 
 
 def _kinematics_block(translations: np.ndarray, rotations: np.ndarray, levels) -> tuple[np.ndarray, np.ndarray]:
