@@ -61,6 +61,14 @@ def _travel_curve(motion: Motion, pelvis: int) -> np.ndarray:
     return np.maximum.accumulate((xz - xz[0]) @ (net / norm))
 
 
+@per_motion
+def pelvis_travel(motion: Motion, pelvis: int) -> np.ndarray:
+    """(2,) the pelvis's travel over the ground (x, z) from a clip's first frame to its last
+    (worked out once per clip; read-only)."""
+    hips = forward_kinematics(motion)[0][:, pelvis][:, [0, 2]]
+    return hips[-1] - hips[0]
+
+
 def _sample(motion: Motion, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Translations and rotations at clip times ``u`` (seconds), by interpolation."""
     f = np.clip(u / motion.frame_time, 0, motion.frames - 1)

@@ -301,15 +301,14 @@ class _Unplayed:
 def _span(seg, track, choice: Choice):
     """The segment's place on the doodle's timeline with what the trajectory transfer needs
     (flags, execution stage, the clip's own travel direction); and whether it travels."""
-    from retarget.skeleton import forward_kinematics
+    from retarget.sequence import pelvis_travel
     from retarget.trajectory import Span
 
     clip, action = choice.clip, choice.action
     n = clip.motion.frames
     b = clip.stages.bounds()
     execution = (b["execution"][0] / max(n - 1, 1), b["execution"][1] / max(n - 1, 1))
-    hips = forward_kinematics(clip.motion)[0][:, clip.roles["pelvis"]][:, [0, 2]]
-    travel = hips[-1] - hips[0]
+    travel = pelvis_travel(clip.motion, int(clip.roles["pelvis"]))  # once per clip: segments share them
     travels = not action.in_place and float(np.linalg.norm(travel)) > 0.2  # a walk, a jump
     span = Span(seg.action, float(track.t[seg.start]), float(track.t[min(seg.end, len(track.t) - 1)]),
                 seg.start, seg.end, action.in_place, action.jumping, action.cyclic, execution,
