@@ -448,6 +448,11 @@ EFFORT_NAMES: tuple[str, ...] = tuple(EFFORT_SOURCES)
 def effort_signal(t: np.ndarray, p: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, float]:
     """The segment on the fixed grid: ``(grid, v, a, j, dt)`` — velocity, acceleration and jerk
     (n, 3) of the cubic spline through ``p`` low-passed by the EFFORT_SIGMA Gaussian."""
+    return _effort_signal(t, p)[:5]
+
+
+def _effort_signal(t: np.ndarray, p: np.ndarray) -> tuple:
+    """:func:`effort_signal` and the spline's points on the grid before the low-pass."""
     from scipy.interpolate import CubicSpline
     from scipy.ndimage import gaussian_filter1d
 
@@ -457,15 +462,15 @@ def effort_signal(t: np.ndarray, p: np.ndarray) -> tuple[np.ndarray, np.ndarray,
     n = max(MIN_SAMPLES, int(round(duration * EFFORT_RATE)) + 1)
     grid = np.linspace(t[0], t[-1], n)
     dt = duration / (n - 1)
-    x = CubicSpline(t, p, axis=0, bc_type="natural")(grid) if len(t) >= 4 else _resample(t, grid, p)
-    x = gaussian_filter1d(x - x[0], EFFORT_SIGMA / dt, axis=0, mode="nearest")
+    points = CubicSpline(t, p, axis=0, bc_type="natural")(grid) if len(t) >= 4 else _resample(t, grid, p)
+    x = gaussian_filter1d(points - points[0], EFFORT_SIGMA / dt, axis=0, mode="nearest")
     # central differences of the smoothed signal (scipy's derivative-of-Gaussian kernels are
     # truncated and leak a constant offset into the acceleration); at 120 Hz they are within
     # 1 % of the exact derivatives of anything the low-pass lets through
     v = np.gradient(x, dt, axis=0)
     a = np.gradient(v, dt, axis=0)
     j = np.gradient(a, dt, axis=0)
-    return grid, v, a, j, dt
+    return grid, v, a, j, dt, points
 
 
 def _stroke_peaks(speed: np.ndarray) -> np.ndarray:
@@ -549,7 +554,7 @@ def effort_features(t: np.ndarray, p: np.ndarray) -> np.ndarray:
     p = np.asarray(p, float).reshape(-1, 3)
     if len(t) < 2 or not t[-1] > t[0]:
         return np.zeros(len(EFFORT_NAMES))
-    grid, v, a, j, dt = effort_signal(t, p)
+    grid, v, a, j, dt, points = _effort_signal(t, p)
     speed, acc, jerk = _norm(v), _norm(a), _norm(j)
     top = float(speed.max())
     if top <= TINY:
@@ -559,10 +564,7 @@ def effort_features(t: np.ndarray, p: np.ndarray) -> np.ndarray:
     if hi - lo < 3:
         lo, hi = max(0, lo - 1), min(len(speed), hi + 1)
     sp, ac, je = speed[lo:hi], acc[lo:hi], jerk[lo:hi]
-    x = _resample(t, grid[lo:hi], p) if len(t) < 4 else None
-    from scipy.interpolate import CubicSpline
-
-    pts = x if x is not None else CubicSpline(t, p, axis=0, bc_type="natural")(grid[lo:hi])
+    pts = points[lo:hi]  # the spline (or the line) through p on the active part of the grid: made once
     extent = max(2.0 * float(np.max(_norm(pts - pts.mean(axis=0)))), TINY)
     active = (hi - lo) * dt
     tangential = np.gradient(sp, dt) if len(sp) > 1 else np.zeros(1)

@@ -22,7 +22,7 @@ import numpy as np
 from doodle.core import quat
 from doodle.core.profiles import min_jerk
 from retarget.analysis import foot_contacts
-from retarget.skeleton import Motion, forward_kinematics
+from retarget.skeleton import FK_BLOCK, Motion, forward_kinematics, kinematics_of
 
 
 def _unit(v: np.ndarray) -> np.ndarray:
@@ -128,7 +128,8 @@ LOWEST = 0.2  # m: the most the pelvis is lowered for a foot on lower ground (a 
 
 
 def pin_feet(motion: Motion, feet: list[int], fade: int = 3, terrain=None, contacts: np.ndarray | None = None,
-             standing: list[float] | None = None, sole: float = 0.0, ground_y: np.ndarray | None = None) -> Motion:
+             standing: list[float] | None = None, sole: float = 0.0, ground_y: np.ndarray | None = None,
+             in_place: bool = False) -> Motion:
     """The motion with each foot held still over each of its contact intervals.
 
     ``contacts`` (F, len(feet)): where the foot stands — the sequenced clips' own contacts
@@ -143,10 +144,22 @@ def pin_feet(motion: Motion, feet: list[int], fade: int = 3, terrain=None, conta
     root (a swinging foot clears a rise, a standing one stands on its own ground), and
     where a leg cannot reach its spot the pelvis is lowered: its height comes from the
     ground under the feet, not under the root (``ground_y``, per frame: the ground the root
-    was put on). Pins fade in and out over ``fade`` frames."""
-    original = forward_kinematics(motion)[0]
+    was put on). Pins fade in and out over ``fade`` frames. ``in_place``: ``motion``'s own
+    arrays are changed rather than copied (a motion nothing else holds: just sequenced)."""
+    legs = {0}  # the joints read here: root, each foot's subtree (toes, end sites), knee, hip and pelvis
+    for a in feet:
+        legs.update(motion.skeleton.subtree(a))
+        j = a
+        for _ in range(3):
+            j = int(motion.skeleton.parents[j])
+            legs.add(j % len(motion.skeleton))  # (a root hip's parent is read as joint -1)
+            if j < 0:
+                break
     if contacts is None:
+        original = forward_kinematics(motion)[0]
         contacts = planted(motion, feet, original, terrain)
+    else:  # only the legs' positions: a long motion's (F, J, 7) never made
+        original = kinematics_of(motion, legs)[0]
     rise = None
     if terrain is not None:  # the ground under each foot relative to the ground under the root,
         # but not in the air (both feet off: the feet go with the body)
@@ -164,8 +177,8 @@ def pin_feet(motion: Motion, feet: list[int], fade: int = 3, terrain=None, conta
         targets.append(target)
         weights.append(weight)
         helds.append(held)
-    motion = _lower_to_reach(motion, original, feet, targets, weights)
-    world = forward_kinematics(motion)
+    motion = _lower_to_reach(motion, original, feet, targets, weights, in_place)
+    world = kinematics_of(motion, legs)
     front = _front(motion, world[0], feet)
     rots = None  # the legs share one copy of the rotations (each changes only its own joints)
     for k, ankle in enumerate(feet):
@@ -173,15 +186,18 @@ def pin_feet(motion: Motion, feet: list[int], fade: int = 3, terrain=None, conta
         hip = int(motion.skeleton.parents[knee]) if knee >= 0 else -1
         if hip < 0 or not weights[k].any():
             continue
-        rots = motion.rotations.copy() if rots is None else rots
+        rots = (motion.rotations if in_place else motion.rotations.copy()) if rots is None else rots
         _leg_ik(rots, motion, hip, knee, ankle, targets[k], weights[k], world=world, front=front)
     motion = motion if rots is None else replace(motion, rotations=rots)
     if terrain is not None:  # the foot laid along the slope under it
         motion = _soles_on_ground(motion, original, feet, terrain, ground_y)
+        rots = motion.rotations
     del original
     world = None  # freed before the next is made
-    world = forward_kinematics(motion)
-    rots = None
+    world = kinematics_of(motion, legs)
+    # a copy made here is changed in place (_leg_ik reads only rots and world of it), the caller's never
+    rots = rots if rots is not None and rots is motion.rotations else None
+    rots = motion.rotations if in_place and rots is None else rots
     for k, ankle in enumerate(feet):  # a standing foot's lowest point (heel, toes) on the ground
         knee = int(motion.skeleton.parents[ankle])
         hip = int(motion.skeleton.parents[knee]) if knee >= 0 else -1
@@ -347,7 +363,8 @@ def _smooth(x: np.ndarray) -> np.ndarray:
     return x * x * (3 - 2 * x)
 
 
-def _lower_to_reach(motion: Motion, positions: np.ndarray, feet: list[int], targets: list, weights: list) -> Motion:
+def _lower_to_reach(motion: Motion, positions: np.ndarray, feet: list[int], targets: list, weights: list,
+                    in_place: bool = False) -> Motion:
     """The root lowered, eased, wherever a pinned foot's spot is out of its straight leg's
     reach (a foot on ground lower than the root's, a style that lifted the body)."""
     from scipy.ndimage import gaussian_filter1d, maximum_filter1d
@@ -367,28 +384,36 @@ def _lower_to_reach(motion: Motion, positions: np.ndarray, feet: list[int], targ
     if not need.any():
         return motion
     need = np.maximum(gaussian_filter1d(maximum_filter1d(np.minimum(need, LOWEST), 5), 1.5), np.minimum(need, LOWEST))
-    trans = motion.translations.copy()
+    trans = motion.translations if in_place else motion.translations.copy()
     trans[:, 0, 1] -= need
     return replace(motion, translations=trans)
 
 
-def clamp_to_ground(motion: Motion, terrain=None) -> Motion:
+def clamp_to_ground(motion: Motion, terrain=None, in_place: bool = False) -> Motion:
     """The motion raised, frame by frame, so no joint or End Site of the body (a helper root
     above the pelvis does not count) is below the ground (``terrain``; flat y = 0 when
-    None); the lift is eased in and out over a few frames."""
+    None); the lift is eased in and out over a few frames. ``in_place``: ``motion``'s
+    translations are changed rather than copied (a motion nothing else holds)."""
     from scipy.ndimage import gaussian_filter1d, maximum_filter1d
 
     from retarget.analysis import pelvis_of
     from retarget.skeleton import end_site_positions
 
-    world = forward_kinematics(motion)
-    body = world[0] if pelvis_of(motion.skeleton) == 0 else world[0][:, 1:]  # not a helper root on the floor
-    points = np.concatenate([body] + [end[:, None] for end in end_site_positions(motion, world).values()], axis=1)
-    ground = 0.0 if terrain is None else terrain.height(points[:, :, [0, 2]])
-    lift = np.maximum(0.0, np.max(ground - points[:, :, 1], axis=1))
+    helper = pelvis_of(motion.skeleton) != 0  # a helper root on the floor does not count
+
+    def below(part: Motion) -> np.ndarray:  # (n,) how far each frame's lowest point is under the ground
+        world = forward_kinematics(part)
+        body = world[0][:, 1:] if helper else world[0]
+        points = np.concatenate([body] + [end[:, None] for end in end_site_positions(part, world).values()], axis=1)
+        ground = 0.0 if terrain is None else terrain.height(points[:, :, [0, 2]])
+        return np.maximum(0.0, np.max(ground - points[:, :, 1], axis=1))
+
+    # frame by frame, so in blocks of frames: a long motion's forward kinematics is never whole
+    lift = np.concatenate([below(motion.slice(a, a + FK_BLOCK)) for a in range(0, motion.frames, FK_BLOCK)]
+                          or [np.zeros(0)])
     if not lift.any():
         return motion
     lift = np.maximum(gaussian_filter1d(maximum_filter1d(lift, 5), 1.5), lift)
-    trans = motion.translations.copy()
+    trans = motion.translations if in_place else motion.translations.copy()
     trans[:, 0, 1] += lift
     return replace(motion, translations=trans)

@@ -40,7 +40,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from retarget.analysis import guess_roles
-from retarget.skeleton import Motion, end_site_positions, forward_kinematics
+from retarget.skeleton import Motion, end_site_positions, forward_kinematics, kinematics_of
 
 
 @dataclass(frozen=True)
@@ -181,6 +181,9 @@ def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
     return list(zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)))
 
 
+CHECK_BLOCK = 4096  # frames of the body's points worked out at once
+
+
 def check(motion: Motion, terrain=None, limits: Limits = Limits(), ground: float | None = None,
           world=None, sole: float = 0.0) -> Check:
     """The check of one character. The ground is ``terrain`` (its height under each point),
@@ -195,7 +198,10 @@ def check(motion: Motion, terrain=None, limits: Limits = Limits(), ground: float
     dt = motion.frame_time
     pelvis = roles.get("pelvis", 0)
     body = [j for j in range(len(motion.skeleton)) if j != 0 or pelvis == 0]  # not a helper root on the floor
-    every = np.concatenate([positions[:, body]] + [e[:, None] for e in ends.values()], axis=1)
+
+    def every(a: int, b: int) -> np.ndarray:  # every point of the body, frames [a, b)
+        return np.concatenate([positions[a:b, body]] + [e[a:b, None] for e in ends.values()], axis=1)
+
     feet = [roles[k] for k in ("left_foot", "right_foot") if k in roles]
     soles = [_foot_points(motion, positions, ends, a) for a in feet]
 
@@ -226,7 +232,12 @@ def check(motion: Motion, terrain=None, limits: Limits = Limits(), ground: float
             if (b - a) * dt >= limits.held:
                 standing[a:b] = True
         lowest = np.minimum(lowest, sole_h)
-    speeds = np.linalg.norm(np.diff(every, axis=0), axis=2).max(axis=1) / dt if motion.frames > 1 else np.zeros(0)
+    # the body's fastest point and lowest height per frame, in blocks of frames (a long motion's
+    # (F, points, 3) is never copied whole)
+    blocks = range(0, motion.frames, CHECK_BLOCK)
+    speeds = (np.concatenate([np.linalg.norm(np.diff(every(a, a + CHECK_BLOCK + 1), axis=0), axis=2).max(axis=1)
+                              for a in blocks if a + 1 < motion.frames]) / dt
+              if motion.frames > 1 else np.zeros(0))
     pops = np.flatnonzero(speeds > limits.pop) + 1
     hovering = standing.copy()
     if soles:
@@ -234,7 +245,7 @@ def check(motion: Motion, terrain=None, limits: Limits = Limits(), ground: float
             if (b - a) * dt > limits.flight:
                 hovering[a:b] = True
     sole_top = np.max(sole_heights, axis=0) if soles else lowest
-    body_h = height(every).min(axis=1)
+    body_h = np.concatenate([height(every(a, a + CHECK_BLOCK)).min(axis=1) for a in blocks] or [np.zeros(0)])
     sinking = np.flatnonzero(body_h < -limits.sink)
     return Check(motion.frames, motion.fps, tuple(np.flatnonzero(sliding)), tuple(pops),
                  float(speeds.max()) if len(speeds) else 0.0, tuple(_one_frame_turns(rotations[:, pelvis], limits.turn)),
@@ -374,6 +385,14 @@ def reaction_onset(motion: Motion, joint: int, first: int, last: int, limits: Li
     while k > 0 and speed[k - 1] > limits.stir:
         k -= 1
     return first + k
+
+
+def check_world(motion: Motion) -> tuple:
+    """The forward kinematics :func:`check` and :func:`check_scene` read (and the report's
+    metrics): every joint's position, but the rotations only of the pelvis and the joints
+    with End Sites (a long motion's rotations of every joint are never made)."""
+    joints = {0, guess_roles(motion.skeleton).get("pelvis", 0), *motion.skeleton.end_sites}
+    return kinematics_of(motion, joints, every_position=True)
 
 
 def check_scene(motions: dict, terrain=None, limits: Limits = Limits(), ground: float | None = 0.0,

@@ -61,6 +61,14 @@ def _travel_curve(motion: Motion, pelvis: int) -> np.ndarray:
     return np.maximum.accumulate((xz - xz[0]) @ (net / norm))
 
 
+@per_motion
+def pelvis_travel(motion: Motion, pelvis: int) -> np.ndarray:
+    """(2,) the pelvis's travel over the ground (x, z) from a clip's first frame to its last
+    (worked out once per clip; read-only)."""
+    hips = forward_kinematics(motion)[0][:, pelvis][:, [0, 2]]
+    return hips[-1] - hips[0]
+
+
 def _sample(motion: Motion, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Translations and rotations at clip times ``u`` (seconds), by interpolation."""
     f = np.clip(u / motion.frame_time, 0, motion.frames - 1)
@@ -283,7 +291,8 @@ def sequence(placed: list[Placed], times: np.ndarray, path_xz: np.ndarray, headi
         weight[idx] += w
     weight = np.maximum(weight, 1e-9)
     trans /= weight[:, None, None]
-    rots /= np.linalg.norm(rots, axis=-1, keepdims=True)
+    for a in range(0, frames, 4096):  # normalised in blocks: no whole-timeline temporaries
+        rots[a:a + 4096] /= np.linalg.norm(rots[a:a + 4096], axis=-1, keepdims=True)
     return Motion(skeleton, trans, rots, 1.0 / fps), boundaries
 
 

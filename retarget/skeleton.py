@@ -158,8 +158,50 @@ def _kinematics(motion: Motion) -> tuple[np.ndarray, np.ndarray]:
         pos, rot = _kinematics_block(motion.translations[a:b], motion.rotations[a:b], levels)
         positions[a:b] = pos.transpose(2, 1, 0)
         rotations[a:b] = rot.transpose(2, 1, 0)
-    norm = np.linalg.norm(rotations, axis=-1, keepdims=True)
-    return positions, rotations / norm
+        rotations[a:b] /= np.linalg.norm(rotations[a:b], axis=-1, keepdims=True)  # in place, block by block
+    return positions, rotations
+
+
+class Joints:
+    """World positions or rotations (:func:`kinematics_of`) of some joints only, read as the
+    whole (F, J, ·) array is read: ``a[:, j]`` and ``a[:, j, k]`` (any other joint is a KeyError)."""
+
+    def __init__(self, columns: dict, joints: int):
+        self.columns = columns  # joint -> (F, ·)
+        self.joints = joints  # J: a negative joint counts from the end, as in the array
+
+    def __getitem__(self, key):
+        rows, joint, *rest = key
+        if rows != slice(None):
+            raise IndexError("Joints are read a whole joint at a time: a[:, j]")
+        column = self.columns[int(joint) % self.joints]
+        return column[(slice(None), *rest)] if rest else column
+
+
+def kinematics_of(motion: Motion, joints, every_position: bool = False) -> tuple:
+    """:func:`forward_kinematics` of ``joints`` only (their world positions and rotations,
+    bit for bit the same), worked out in blocks of frames: a long motion's foot pinning
+    needs its legs', not the (F, J, 7) of every joint. ``every_position``: the positions
+    of every joint (the whole (F, J, 3) array), the rotations still only of ``joints``."""
+    joints = sorted({int(j) for j in joints})
+    f, j = motion.frames, len(motion.skeleton)
+    everywhere = np.empty((f, j, 3)) if every_position else None
+    positions = {} if every_position else {k: np.empty((f, 3)) for k in joints}
+    rotations = {k: np.empty((f, 4)) for k in joints}
+    levels = _levels(motion.skeleton)
+    for a in range(0, f, FK_BLOCK):
+        b = min(a + FK_BLOCK, f)
+        pos, rot = _kinematics_block(motion.translations[a:b], motion.rotations[a:b], levels)
+        block = np.empty((b - a, j, 4))
+        block[:] = rot.transpose(2, 1, 0)
+        block /= np.linalg.norm(block, axis=-1, keepdims=True)  # as _kinematics normalises
+        if every_position:
+            everywhere[a:b] = pos.transpose(2, 1, 0)
+        for k in joints:
+            if not every_position:
+                positions[k][a:b] = pos[:, k].T
+            rotations[k][a:b] = block[:, k]
+    return everywhere if every_position else Joints(positions, j), Joints(rotations, j)
 
 
 def _kinematics_block(translations: np.ndarray, rotations: np.ndarray, levels) -> tuple[np.ndarray, np.ndarray]:

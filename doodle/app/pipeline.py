@@ -178,10 +178,10 @@ def compile_doodle(doodle: Doodle, library_dir=None, use_builtin: bool = True, p
                    for tr, seg in ((ta, a), (tb, b))}
     for track in doodle.tracks:
         tokens, segments = recognised[track.name]
-        choices = []
+        choices, styled = [], {}  # styled: one stylised clip per distinct (clip, quality), shared by its segments
         for index, seg in enumerate(segments):
             choices.append(choose(seg, track, actions, skeleton, rest, _quality_of(qualities, track.name, index),
-                                  effort_model, style))
+                                  effort_model, style, styled))
             if progress:
                 done += 1
                 progress(done, total)
@@ -192,6 +192,8 @@ def compile_doodle(doodle: Doodle, library_dir=None, use_builtin: bool = True, p
         choices = [c if (track.name, seg.first, seg.action) in interacting
                    else replace(c, clip=_Unplayed(c.clip.path, c.clip.retargeted)) for seg, c in zip(segments, choices)]
         chosen[track.name] = choices
+        styled.clear()  # (an interaction's clip stays in its choice)
+        _release_heap()
         results.append(finish(track, tokens, segments, staged, times, rest, scale, terrain, origin))
         del staged
         for seg, c in zip(segments, choices):
@@ -211,6 +213,17 @@ def compile_doodle(doodle: Doodle, library_dir=None, use_builtin: bool = True, p
     contacts = _contacts(results, recognised, {i.name: i for i in actions.library.interactions}, chosen)
     _apart(results, recognised, contacts)
     return [replace(r, contacts=contacts) for r in results]
+
+
+def _release_heap() -> None:
+    """The heap freed so far handed back to the system (glibc's ``malloc_trim``; elsewhere
+    nothing): a long track's clips are many small arrays, and the peak comes after them."""
+    import ctypes
+
+    try:
+        ctypes.CDLL("libc.so.6").malloc_trim(0)
+    except (OSError, AttributeError):
+        pass
 
 
 def scene(doodle: Doodle, actions: Actions, params: SegmenterParams, threshold: float, scale: float):
@@ -235,14 +248,17 @@ def scene(doodle: Doodle, actions: Actions, params: SegmenterParams, threshold: 
     return doodle, recognised
 
 
-def choose(seg, track, actions: Actions, skeleton, rest, given, effort_model, style: str) -> Choice:
+def choose(seg, track, actions: Actions, skeleton, rest, given, effort_model, style: str,
+           styled: dict | None = None) -> Choice:
     """The clip a segment plays on the output skeleton (the rest pose where its action has
     none): the first that travels the way the action means (a side step sideways, relative
     to its facing; :func:`retarget.clips.fits`) — the library's own before a retargeted
     built-in one — stylised by the quality ``given`` or, without one, the one the effort
     model recognises in the hand's motion (a cycle is never retimed: its pace is the
     hand's travel; a jump's timing is left as it is — its flight lasts what gravity gives it
-    — and it takes the quality in its poses)."""
+    — and it takes the quality in its poses). ``styled``: stylised clips already made, by
+    clip and quality (filled here; segments asking for the same share one — a long doodle
+    asks for the same few again and again, and clips are never changed in place)."""
     from retarget.clips import fits
 
     library = actions.library
@@ -259,10 +275,18 @@ def choose(seg, track, actions: Actions, skeleton, rest, given, effort_model, st
     lt, lw = given or (0.0, 0.0)
     if action.cyclic:
         lt = 0.0
-    styled = bool((lt or lw) and on_skeleton)
-    if styled:
-        clip = _stylized(clip, lt, lw, "preferred" if action.jumping else style, action.cyclic)
-    return Choice(clip, action, bool(on_skeleton), (lt, lw) if styled else (0.0, 0.0), effort,
+    styling = bool((lt or lw) and on_skeleton)
+    if styling:
+        how = "preferred" if action.jumping else style
+        if styled is None:
+            clip = _stylized(clip, lt, lw, how, action.cyclic)
+        else:
+            key = (id(clip), repr(lt), repr(lw), how, action.cyclic)  # (repr: -0.0 is not 0.0); the neutral
+            # clip is kept beside its stylisation, so its id stays its own
+            if key not in styled:
+                styled[key] = (clip, _stylized(clip, lt, lw, how, action.cyclic))
+            clip = styled[key][1]
+    return Choice(clip, action, bool(on_skeleton), (lt, lw) if styling else (0.0, 0.0), effort,
                   bool(on_skeleton) and clip.retargeted)
 
 
@@ -277,15 +301,14 @@ class _Unplayed:
 def _span(seg, track, choice: Choice):
     """The segment's place on the doodle's timeline with what the trajectory transfer needs
     (flags, execution stage, the clip's own travel direction); and whether it travels."""
-    from retarget.skeleton import forward_kinematics
+    from retarget.sequence import pelvis_travel
     from retarget.trajectory import Span
 
     clip, action = choice.clip, choice.action
     n = clip.motion.frames
     b = clip.stages.bounds()
     execution = (b["execution"][0] / max(n - 1, 1), b["execution"][1] / max(n - 1, 1))
-    hips = forward_kinematics(clip.motion)[0][:, clip.roles["pelvis"]][:, [0, 2]]
-    travel = hips[-1] - hips[0]
+    travel = pelvis_travel(clip.motion, int(clip.roles["pelvis"]))  # once per clip: segments share them
     travels = not action.in_place and float(np.linalg.norm(travel)) > 0.2  # a walk, a jump
     span = Span(seg.action, float(track.t[seg.start]), float(track.t[min(seg.end, len(track.t) - 1)]),
                 seg.start, seg.end, action.in_place, action.jumping, action.cyclic, execution,
@@ -366,7 +389,9 @@ def sequenced(track, segments, choices, times, skeleton, rest, scale, terrain, o
 def finish(track, tokens, segments, staged: "Sequenced", times, rest, scale, terrain, origin) -> Animation:
     """A track's sequenced motion (:func:`sequenced`) with its feet pinned in their
     contacts (where it has them: foot pinning on) and clamped to the ground, as an
-    Animation. Needs none of the clips any more: they can be let go first."""
+    Animation. Needs none of the clips any more: they can be let go first. The sequenced
+    motion's arrays are changed in place (nothing else holds them: a long track's timeline is
+    not copied twice more)."""
     from retarget.feet import clamp_to_ground, pin_feet
 
     motion, frame_path = staged.motion, staged.path
@@ -374,8 +399,8 @@ def finish(track, tokens, segments, staged: "Sequenced", times, rest, scale, ter
     standing, sole = _standing(rest, feet)
     if staged.contacts is not None:
         motion = pin_feet(motion, feet, terrain=terrain, contacts=staged.contacts,
-                          standing=standing, sole=sole, ground_y=frame_path[:, 1])
-    motion = clamp_to_ground(motion, terrain)
+                          standing=standing, sole=sole, ground_y=frame_path[:, 1], in_place=True)
+    motion = clamp_to_ground(motion, terrain, in_place=True)
     ranges = [(int(np.searchsorted(times, sp.t0)), int(min(np.searchsorted(times, sp.t1), len(times) - 1)))
               for sp in staged.spans]
     projected = (track.p - origin) * scale
@@ -906,12 +931,18 @@ def quality(result: Animation, world: tuple | None = None) -> dict:
     world = forward_kinematics(motion) if world is None else world
     positions = world[0]
     ends = end_site_positions(motion, world)
-    points = np.concatenate([positions] + [e[:, None] for e in ends.values()], axis=1)
-    ground = 0.0 if result.terrain is None else result.terrain.height(points[:, :, [0, 2]])
-    lowest = float(np.min(points[:, :, 1] - ground))
+    block = 4096  # frames at once: a long motion's (F, points, 3) is never copied whole
+
+    def below(a: int) -> float:  # the lowest point's height above the ground in frames [a, a + block)
+        points = np.concatenate([positions[a:a + block]] + [e[a:a + block, None] for e in ends.values()], axis=1)
+        ground = 0.0 if result.terrain is None else result.terrain.height(points[:, :, [0, 2]])
+        return float(np.min(points[:, :, 1] - ground))
+
+    lowest = min(below(a) for a in range(0, motion.frames, block))
     pelvis = positions[:, roles["pelvis"]]
     deviation = float(np.mean(np.linalg.norm(pelvis[:, [0, 2]] - result.path[:, [0, 2]], axis=1)))
-    acc = np.linalg.norm(np.diff(positions, n=2, axis=0), axis=2).max(axis=1) / motion.frame_time ** 2
+    acc = np.concatenate([np.linalg.norm(np.diff(positions[a:a + block + 2], n=2, axis=0), axis=2).max(axis=1)
+                          for a in range(0, max(motion.frames - 2, 0), block)] or [np.zeros(0)]) / motion.frame_time ** 2
     times = np.arange(motion.frames) * motion.frame_time
     inner = times[1:-1]
     near = np.zeros(len(acc), dtype=bool)

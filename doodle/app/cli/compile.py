@@ -83,8 +83,7 @@ def compile_scene(file, output, args, progress=None) -> tuple[dict, dict]:
     from doodle.app.pipeline import check_edits, compile_doodle, quality
     from doodle.app.report import compiled as compiled_report
     from retarget.bvh import write_bvh
-    from retarget.qa import check_scene
-    from retarget.skeleton import forward_kinematics
+    from retarget.qa import check_scene, check_world
 
     from retarget.terrain import parse_terrain
 
@@ -111,7 +110,7 @@ def compile_scene(file, output, args, progress=None) -> tuple[dict, dict]:
     if args.edits:
         check_edits(args.edits, qualities, {r.track: len(r.segments) for r in results})
     paths = {r.track: out / f"{r.track}.bvh" for r in results}
-    worlds = {r.track: forward_kinematics(r.motion) for r in results}  # shared by the check and the metrics
+    worlds = {r.track: check_world(r.motion) for r in results}  # shared by the check and the metrics
     checks = check_scene({r.track: r.motion for r in results}, terrain, contacts=results[0].contacts,
                          soles={r.track: r.sole for r in results}, worlds=worlds)
     metrics = {r.track: quality(r, worlds[r.track]) for r in results}
