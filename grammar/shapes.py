@@ -437,8 +437,10 @@ class Refiner:
     from the pause before it to the pause after it (or the end of the track), when that is
     at most :data:`SPOT_MAX` tokens — bounds the windows (none crosses those pauses) and is
     a window itself; a window pays for the motion's path length it leaves out as if that
-    were at the action's rejection distance (:meth:`_best`). The best window wins; with
-    none, the segment is unknown. A window may also take back up to
+    were at the action's rejection distance (:meth:`_best`). The best window wins — unless
+    two learned actions fit the motion's two parts better than one fits it (:meth:`_two`):
+    then both are read, back to back. With none, the segment's own tokens are searched as an
+    unknown run's are (two gestures or one); failing that, it is unknown. A window may also take back up to
     :data:`UNKNOWN_REACH` tokens of the unknown run before it, or reach as far into the
     unknown run after it. Tokens a window takes from the next segment are taken from it;
     tokens it gives up are unknown. An unknown run of :data:`SPOT_TOKENS` to
