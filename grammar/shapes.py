@@ -115,12 +115,16 @@ def sample(poses, points: int = POINTS) -> tuple[np.ndarray, np.ndarray]:
 def features(paths: np.ndarray, quats: np.ndarray | None, turn: float | None = None) -> np.ndarray:
     """Per step of resampled tracks (T, n, 3) — and their orientations (T, n, 4) — the unit
     direction of each track's step and, weighted by ``turn`` (default :data:`TURN`), how its
-    controller has turned since the path's first point: the rotation ``q(s) q(0)⁻¹`` in the
-    room's frame applied to the room's three axes (n − 1, T·3) or (n − 1, T·12).
+    controller is turned from its mean orientation over the path ``q̄``: the rotation
+    ``q(s) q̄⁻¹`` in the room's frame applied to the room's three axes (n − 1, T·3) or
+    (n − 1, T·12).
 
-    The turn since the start, not the controller's orientation itself: a controller held
-    in the hand at a grip offset ``g`` reads ``q = h g`` (``h`` the hand's orientation), so
-    ``q(s) q(0)⁻¹ = h(s) h(0)⁻¹`` — the same for every way of holding it. How the hand
+    The turn, not the controller's orientation itself: a controller held in the hand at a
+    grip offset ``g`` reads ``q = h g`` (``h`` the hand's orientation), whose mean is
+    ``h̄ g``, so ``q(s) q̄⁻¹ = h(s) h̄⁻¹`` — the same for every way of holding it. The mean,
+    not the first sample, is the reference: a window that starts while the wrist turns in
+    place (no path, so no weight in the arc-length resampling) would otherwise shift every
+    step's feature. How the hand
     turns as it moves (a hook's forearm roll, an uppercut's lift) is the person's gesture;
     how they hold the controller is not."""
     from doodle.core import quat
@@ -582,7 +586,7 @@ class Refiner:
         if best is None:
             return []
         f, e, k, edits = best
-        self._unknown = None if f <= pending.first else replace(pending, stop=f, end=self.tokens[f - 1].end)
+        self._take_back(f)
         out = self._emit(self.shapes.names[k], f, e, edits == 0.0, edits)
         out += self._emit(UNKNOWN, e, pending.stop, False, None)
         self._done = done
@@ -631,10 +635,10 @@ class Refiner:
         action, edits)`` and ``(cut, stop, action, edits)`` — when that explains it better than
         one action: the two windows' scores (``edits + WEIGHT × shape distance``, each the
         action it is nearest and within that action's rejection distance) sum to less than the
-        best one window's. Each gesture scores what it costs, so two are chosen over one only
-        when one fits markedly worse than two fit the parts. The windows may leave up to
-        :data:`TRIM` tokens out at either end of the motion; each part holds at least
-        :data:`SPOT_TOKENS` tokens. None otherwise."""
+        best one window's (each gesture scores what it costs, so one window is read unless it
+        fits worse than the two parts together). The windows may leave up to :data:`TRIM`
+        tokens out at either end of the motion; each part holds at least :data:`SPOT_TOKENS`
+        tokens. Unless ``whole``, two are read even where no one window fits. None otherwise."""
         from doodle.core.tokens import CODES
 
         a, b = motion
@@ -655,9 +659,7 @@ class Refiner:
             return None
         ds = self.shapes.distances_of(windows, self._read)
         edits = np.array(edits)
-        own = np.where(self._allowed & np.isfinite(ds), edits + WEIGHT * ds, np.inf)
-        fits = (own == own.min(axis=1, keepdims=True)) & (ds <= self.shapes.reject[None, :]) & np.isfinite(own)
-        alone = np.where(fits, own, np.inf)
+        alone = np.where(self._fits(edits, ds), edits + WEIGHT * ds, np.inf)
         score = alone.min(axis=1)
         one = min((score[i] for i, (f, e) in enumerate(windows) if f in heads and e >= b - TRIM), default=np.inf)
         firsts = [i for i, (f, e) in enumerate(windows) if f in heads and e in cuts]
@@ -673,6 +675,14 @@ class Refiner:
             return None
         k1, k2 = int(np.argmin(alone[i])), int(np.argmin(alone[j]))
         return (*windows[i], k1, float(edits[i, k1])), (*windows[j], k2, float(edits[j, k2]))
+
+    def _fits(self, edits: np.ndarray, ds: np.ndarray, strict: float = 1.0) -> np.ndarray:
+        """(windows, actions): each window is the action it is nearest (``edits + WEIGHT ×
+        shape distance``, among those allowed on this track), if its shape distance is within
+        ``strict`` × that action's rejection distance."""
+        own = np.where(self._allowed & np.isfinite(ds), edits + WEIGHT * ds, np.inf)
+        return (np.isfinite(own) & (own == own.min(axis=1, keepdims=True))
+                & (ds <= strict * self.shapes.reject[None, :]))
 
     def _arc(self, a: int, b: int) -> np.ndarray:
         """Cumulative path length of the track's valid samples over tokens a..b, at each
@@ -729,10 +739,7 @@ class Refiner:
                 inside = np.array([(cum[min(max(e, a), b) - a] - cum[min(max(f, a), b) - a]) / cum[-1]
                                    for f, e in windows])[:, None]
                 cost = inside * ds + (1.0 - inside) * self.shapes.reject[None, :]
-        fits = self._allowed & np.isfinite(ds)
-        own = np.where(fits, edits + WEIGHT * ds, np.inf)  # each window is the action it is nearest…
-        fits &= (own == own.min(axis=1, keepdims=True)) & (ds <= strict * self.shapes.reject[None, :])  # …if that fits
-        score = np.where(fits, edits + WEIGHT * cost, np.inf)
+        score = np.where(self._fits(edits, ds, strict), edits + WEIGHT * cost, np.inf)
         if motion is not None and tuple(motion) in windows:  # a whole motion that fits is one gesture
             m = windows.index(tuple(motion))
             if np.isfinite(score[m]).any():

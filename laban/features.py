@@ -515,7 +515,6 @@ def _stroke_table(speed: np.ndarray, acc: np.ndarray, jerk: np.ndarray, dt: floa
     tangential = np.gradient(speed, dt) if n > 1 else np.zeros(n)
     rows = []
     eps = 1e-12
-    lo_share, mid_share, hi_share = STROKE_CORE
     for i, k in enumerate(peaks):
         if i == 0:
             low = np.flatnonzero(smooth[: k + 1] <= STROKE_REST * smooth[k])

@@ -91,12 +91,15 @@ def test_emote_timing_keeps_the_path_and_changes_its_timing():
         np.testing.assert_allclose(pp[-1], p[-1], atol=1e-6)
     assert strong[1][:, 0].max() > p[:, 0].max() + 0.01  # the overshoot past the goal
     assert strong[1][:, 0].min() < p[:, 0].min() - 0.005  # the anticipation
-    for lw in (1, -1):  # the shipped model: Sudden reads as more Sudden than Sustained, whatever the Weight
-        p_sudden = [_probabilities(*emote(t, p, q, lt, lw, np.random.default_rng(1))[:2])[0] for lt in (1, -1)]
-        odds = [p / (1 - p) for p in p_sudden]
-        # by the odds: this stroke is slow (1 s) when neutral, and its Sudden Light rendition
-        # (0.45 s, flat-topped) no quicker than many a neutral stroke of the motion capture
-        assert odds[0] > 20 * odds[1] and p_sudden[1] < 0.5, (lw, p_sudden)
+
+
+@pytest.mark.parametrize("lw", [1, pytest.param(-1, marks=pytest.mark.xfail(
+    strict=True, reason="the shipped model reads this 1 s stroke's Sudden Light rendition (0.45 s, flat-topped) "
+                        "as Sustained (P(Sudden) 0.19): it judges tempo in absolute terms"))])
+def test_the_shipped_model_reads_emote_sudden_as_sudden(lw):
+    t, p, q = _stroke()
+    p_sudden = [_probabilities(*emote(t, p, q, lt, lw, np.random.default_rng(1))[:2])[0] for lt in (1, -1)]
+    assert p_sudden[0] > 0.5 > p_sudden[1] and p_sudden[0] > p_sudden[1] + 0.25, (lw, p_sudden)
 
 
 def test_temperature_scaling_recovers_a_known_temperature():
@@ -237,7 +240,6 @@ def test_a_factor_a_procedure_did_not_give_is_left_out_of_its_fit():
     groups = np.array([f"{'a' if i % 2 else 'b'}/clip{i % 10}" for i in range(n)])
     yt_unknown = yt.copy()
     yt_unknown[100:] = 0
-    yt_unknown[100:][X[100:, 0] > 0] = 0
     X2 = X.copy()
     X2[100:, EFFORT_NAMES.index("Stroke Duration")] = 50.0  # would wreck Time if they were used for it
     report = {}

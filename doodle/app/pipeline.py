@@ -152,7 +152,7 @@ def compile_doodle(doodle: Doodle, library_dir=None, use_builtin: bool = True, p
     once (:func:`load_for_compile`); the scene recognised and
     its characters placed for their interactions (:func:`scene`); per track, a clip chosen
     and stylised for each segment (:func:`choose`), the path laid on the terrain, the clips
-    sequenced with transitions, feet pinned and clamped (:func:`animate`); contacts between
+    sequenced with transitions (:func:`sequenced`), feet pinned and clamped (:func:`finish`); contacts between
     characters reached (:func:`_contacts`).
 
     Feet are pinned in their contacts unless ``pin`` is False. ``qualities`` maps
@@ -249,7 +249,7 @@ def scene(doodle: Doodle, actions: Actions, params: SegmenterParams, threshold: 
 
 
 def choose(seg, track, actions: Actions, skeleton, rest, given, effort_model, style: str,
-           styled: dict | None = None) -> Choice:
+           styled: dict) -> Choice:
     """The clip a segment plays on the output skeleton (the rest pose where its action has
     none): the first that travels the way the action means (a side step sideways, relative
     to its facing; :func:`retarget.clips.fits`) — the library's own before a retargeted
@@ -278,14 +278,11 @@ def choose(seg, track, actions: Actions, skeleton, rest, given, effort_model, st
     styling = bool((lt or lw) and on_skeleton)
     if styling:
         how = "preferred" if action.jumping else style
-        if styled is None:
-            clip = _stylized(clip, lt, lw, how, action.cyclic)
-        else:
-            key = (id(clip), repr(lt), repr(lw), how, action.cyclic)  # (repr: -0.0 is not 0.0); the neutral
-            # clip is kept beside its stylisation, so its id stays its own
-            if key not in styled:
-                styled[key] = (clip, _stylized(clip, lt, lw, how, action.cyclic))
-            clip = styled[key][1]
+        key = (id(clip), repr(lt), repr(lw), how, action.cyclic)  # (repr: -0.0 is not 0.0); the neutral
+        # clip is kept beside its stylisation, so its id stays its own
+        if key not in styled:
+            styled[key] = (clip, _stylized(clip, lt, lw, how, action.cyclic))
+        clip = styled[key][1]
     return Choice(clip, action, bool(on_skeleton), (lt, lw) if styling else (0.0, 0.0), effort,
                   bool(on_skeleton) and clip.retargeted)
 
@@ -316,16 +313,6 @@ def _span(seg, track, choice: Choice):
     return span, travels
 
 
-def animate(track, tokens, segments, choices, times, skeleton, rest, scale, terrain, origin, fps, jump_arc,
-            retime, style, pin) -> Animation:
-    """One track's animation: the path laid on the terrain (§5.2), the chosen clips placed
-    on it and sequenced with transitions (§5.4) (:func:`sequenced`), feet pinned in their
-    contacts and clamped to the ground (:func:`finish`)."""
-    staged = sequenced(track, segments, choices, times, skeleton, rest, scale, terrain, origin, fps, jump_arc,
-                       retime, style, pin)
-    return finish(track, tokens, segments, staged, times, rest, scale, terrain, origin)
-
-
 def sequenced(track, segments, choices, times, skeleton, rest, scale, terrain, origin, fps, jump_arc,
               retime, style, pin) -> "Sequenced":
     """One track's chosen clips laid on its path and sequenced on the timeline, with what
@@ -351,7 +338,7 @@ def sequenced(track, segments, choices, times, skeleton, rest, scale, terrain, o
         if len(pieces) > 1:
             points[len(pieces) - 2] = _transition_point(pieces[-2], pieces[-1], choices[len(pieces) - 2].clip, clip,
                                                          known)
-    pieces = _transition_points(pieces, [c.clip for c in choices], points, known)
+    pieces = _transition_points(pieces, points)
     limits = [speed_limit(pc, _jump_travel(pc.span, track, scale)) for pc in pieces]
     pieces = make_room(pieces, track.t, limits, [c.clip.stages for c in choices])
     pieces = [replace(pc, pace=paced(pc.motion, pc.clip_in, pc.clip_out, pc.span.t1 - pc.span.t0, limit,
@@ -871,18 +858,13 @@ def _transition_point(a, b, clip_a, clip_b, known: dict | None = None):
     return point
 
 
-def _transition_points(pieces: list, clips: list, points: dict | None = None, known: dict | None = None) -> list:
+def _transition_points(pieces: list, points: dict) -> list:
     """Clip ranges between transition points (§5.3.1) for neighbouring one-shot clips
-    (``points``: the point of pieces k and k + 1 at k, where already found; ``known``: by
-    clip pair, see :func:`_transition_point`)."""
+    (``points``: the point of pieces k and k + 1 at k, :func:`_transition_point`)."""
     pieces = list(pieces)
-    known = {} if known is None else known
     for k in range(len(pieces) - 1):
         a, b = pieces[k], pieces[k + 1]
-        if points is not None and k in points:
-            found = points[k]
-        else:
-            found = _transition_point(a, b, clips[k], clips[k + 1], known)
+        found = points[k]
         if found is None:
             continue
         i, j = found
