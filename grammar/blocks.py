@@ -185,11 +185,16 @@ def _shortest(cost: float, longest: float, limit: float) -> float:
 
 def _unlike(reads: np.ndarray) -> list[int]:
     """Per state, the codes (a bit set) whose step from it differs from the step most codes
-    take (``reads`` (codes, q, q): an action's step per code)."""
+    take (``reads`` (codes, q, q): an action's step per code; a tie goes to the lowest code)."""
+    k, q = reads.shape[:2]
+    steps = np.ascontiguousarray(reads.transpose(1, 0, 2)).view(np.dtype((np.void, 8 * q))).reshape(q, k)
     out = []
-    for p in range(reads.shape[1]):
-        _, kind, count = np.unique(reads[:, p, :], axis=0, return_inverse=True, return_counts=True)
-        out.append(_bits(np.flatnonzero(kind.ravel() != np.argmax(count))))
+    for row in steps.tolist():  # per state, its step for each code as one bytes value
+        count: dict[bytes, int] = {}
+        for step in row:
+            count[step] = count.get(step, 0) + 1
+        most = max(count, key=count.get)
+        out.append(sum(1 << c for c, step in enumerate(row) if step != most))
     return out
 
 
@@ -217,4 +222,4 @@ def _states(bits: int) -> list[int]:
 
 def _levels(costs: np.ndarray, limit: float) -> tuple:
     """Costs per state as levels ``((cost, states), …)``, the costs within ``limit``."""
-    return tuple((float(c), _bits(np.flatnonzero(costs == c))) for c in np.unique(costs[costs <= limit]))
+    return tuple((c, _bits(np.flatnonzero(costs == c))) for c in sorted(set(costs[costs <= limit].tolist())))

@@ -153,3 +153,19 @@ def test_an_automaton_read_back_from_its_tables_matches_the_same():
     assert same(match(tokens, back), match(tokens, fresh))
     with pytest.raises(ValueError):
         compiled.automaton_from(key, {**fresh.tables(), "reads": fresh.tables()["reads"][:-1]})
+
+
+def test_the_codes_a_state_reads_unlike_most_are_the_rest_of_its_largest_group():
+    from grammar.blocks import _unlike
+
+    auto = load_actions().automaton(2.0, True)
+    for reads, unlike in zip(auto.reads, (_unlike(r) for r in auto.reads)):
+        for p, bits in enumerate(unlike):
+            alike = [c for c in range(reads.shape[0]) if not bits >> c & 1]
+            assert alike, p
+            steps = reads[:, p, :]
+            assert all(np.array_equal(steps[c], steps[alike[0]]) for c in alike)  # one step for all
+            group = [c for c in range(reads.shape[0]) if np.array_equal(steps[c], steps[alike[0]])]
+            assert group == alike  # ... and every code taking it
+            sizes = [sum(np.array_equal(steps[c], steps[d]) for d in range(reads.shape[0])) for c in range(reads.shape[0])]
+            assert len(alike) == max(sizes)  # the step most codes take
