@@ -216,7 +216,7 @@ def paced(motion: Motion, clip_in: float, clip_out: float | None, duration: floa
         c = (lo + hi) / 2
         lo, hi = (c, hi) if np.maximum(c * step, least).sum() < duration else (lo, c)
     out = np.maximum(hi * step, least)
-    from scipy.ndimage import gaussian_filter1d
+    from doodle.core.filters import gaussian_filter1d
 
     for _ in range(3):  # the rate eased from squeezed to not (no lurch where a hold meets a swing)
         out = np.maximum(gaussian_filter1d(out, 2.0, mode="nearest"), least)

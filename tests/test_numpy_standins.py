@@ -116,3 +116,23 @@ def test_cubic_hermite_spline_equals_scipys():
     points = np.linspace(x[0] - 1, x[-1] + 1, 99)
     assert _close(splines.CubicHermiteSpline(x, y, dydx)(points), si.CubicHermiteSpline(x, y, dydx)(points))
 
+
+def test_the_catmull_rom_resampling_equals_the_sparse_product():
+    from scipy.sparse import csr_matrix
+
+    from retarget.stylize import _catmull_rom
+
+    rng = np.random.default_rng(6)
+    for frames_n in (1, 2, 5, 40):
+        frames = rng.normal(size=(frames_n, 4, 7))
+        f = np.concatenate([rng.uniform(-1.0, frames_n + 1.0, 50), np.arange(frames_n, dtype=float)])
+        last = frames_n - 1
+        fc = np.clip(f, 0.0, last)
+        k = np.minimum(np.floor(fc).astype(int), max(last - 1, 0))
+        u = fc - k
+        weights = np.stack([0.5 * (-u + 2 * u**2 - u**3), 0.5 * (2 - 5 * u**2 + 3 * u**3),
+                            0.5 * (u + 4 * u**2 - 3 * u**3), 0.5 * (u**3 - u**2)], axis=1)
+        cols = np.clip(k[:, None] + np.arange(-1, 3)[None], 0, last)
+        w = csr_matrix((weights.ravel(), (np.repeat(np.arange(len(f)), 4), cols.ravel())), shape=(len(f), frames_n))
+        theirs = (w @ frames.reshape(frames_n, -1)).reshape((len(f),) + frames.shape[1:])
+        assert _close(_catmull_rom(frames, f), theirs)
