@@ -51,17 +51,20 @@ class CubicHermiteSpline:
         slope = np.diff(y, axis=0) / dxr
         t = (dydx[:-1] + dydx[1:] - 2 * slope) / dxr
         self.x, self.axis = x, axis
-        self.c = np.stack((t / dxr, (slope - dydx[:-1]) / dxr - t, dydx[:-1], y[:-1]))  # (4, n - 1, ...)
+        # scipy's coefficients per piece, highest power first: (n - 1, 4, ...)
+        self._pieces = np.stack((t / dxr, (slope - dydx[:-1]) / dxr - t, dydx[:-1], y[:-1]), axis=1)
 
     def __call__(self, xnew) -> np.ndarray:
         xnew = np.asarray(xnew, dtype=float)
         flat = xnew.ravel()
-        i = np.clip(np.searchsorted(self.x, flat, side="right") - 1, 0, len(self.x) - 2)
-        s = (flat - self.x[i]).reshape((-1,) + (1,) * (self.c.ndim - 2))
-        c = self.c[:, i]
+        i = np.searchsorted(self.x, flat, side="right") - 1
+        np.clip(i, 0, len(self.x) - 2, out=i)
+        tail = self._pieces.shape[2:]
+        s = (flat - self.x[i]).reshape((-1,) + (1,) * len(tail))
+        c = self._pieces[i]
         s2 = s * s  # scipy's order: c3 + c2 s + c1 s² + c0 s³, the powers built up
-        out = ((c[3] + c[2] * s) + c[1] * s2) + c[0] * (s2 * s)
-        out = out.reshape(xnew.shape + self.c.shape[2:])
+        out = ((c[:, 3] + c[:, 2] * s) + c[:, 1] * s2) + c[:, 0] * (s2 * s)
+        out = out.reshape(xnew.shape + tail)
         if self.axis:
             k = xnew.ndim
             order = list(range(out.ndim))
