@@ -42,6 +42,8 @@ import numpy as np
 from numpy.lib.stride_tricks import as_strided
 
 from doodle.core import quat
+from doodle.core.filters import gaussian_filter1d
+from doodle.core.splines import CubicSpline
 
 WINDOW_S = 0.12  # s, Savitzky–Golay window (11 samples at 90 Hz)
 ORDER = 3  # cubic fits: up to the third derivative (jerk)
@@ -453,9 +455,6 @@ def effort_signal(t: np.ndarray, p: np.ndarray) -> tuple[np.ndarray, np.ndarray,
 
 def _effort_signal(t: np.ndarray, p: np.ndarray) -> tuple:
     """:func:`effort_signal` and the spline's points on the grid before the low-pass."""
-    from scipy.interpolate import CubicSpline
-    from scipy.ndimage import gaussian_filter1d
-
     t = np.asarray(t, float).ravel()
     p = np.asarray(p, float).reshape(-1, 3)
     duration = float(t[-1] - t[0])
@@ -507,8 +506,6 @@ def _stroke_table(speed: np.ndarray, acc: np.ndarray, jerk: np.ndarray, dt: floa
     is the time from 10 % to 90 % of the stroke's length ``L``, its rise from 10 % to 50 %.
     The dimensionless Weight measures use the whole stroke, minimum to minimum (``T``, ``L``):
     a Strong or a Light stroke differs most at its ends."""
-    from scipy.ndimage import gaussian_filter1d
-
     n = len(speed)
     smooth = gaussian_filter1d(speed, STROKE_SMOOTH / dt, mode="nearest") if n > 1 else speed
     peaks = _stroke_peaks(smooth)

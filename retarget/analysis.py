@@ -40,8 +40,8 @@ from dataclasses import dataclass
 from functools import lru_cache
 
 import numpy as np
-from scipy.ndimage import gaussian_filter1d
 
+from doodle.core.filters import gaussian_filter1d
 from doodle.core.peaks import find_peaks
 from retarget.skeleton import Motion, Skeleton, end_site_positions, forward_kinematics
 

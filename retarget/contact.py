@@ -19,6 +19,7 @@ from dataclasses import replace
 import numpy as np
 
 from doodle.core.arap import deform
+from doodle.core.filters import gaussian_filter1d
 from retarget.analysis import guess_roles
 from retarget.feet import two_bone_ik
 from retarget.skeleton import Motion, forward_kinematics
@@ -148,8 +149,6 @@ def apart(motion: Motion, other: Motion, touching: tuple = (), rounds: int = 8, 
     of other) contact pairs allowed to touch (:attr:`retarget.qa.Limits.touch`).
     ``vertical`` (+1 over, −1 under): two embracing characters' arms pass one over the
     other's instead of being pushed out sideways."""
-    from scipy.ndimage import gaussian_filter1d
-
     from retarget.qa import Limits, capsules, closest_points
 
     limits = Limits()

@@ -27,9 +27,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.interpolate import CubicSpline
-from scipy.ndimage import gaussian_filter1d
 
+from doodle.core.filters import gaussian_filter1d
+from doodle.core.splines import CubicSpline
 from retarget.analysis import guess_roles
 from retarget.skeleton import Motion, forward_kinematics
 

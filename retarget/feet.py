@@ -20,6 +20,7 @@ from dataclasses import replace
 import numpy as np
 
 from doodle.core import quat
+from doodle.core.filters import gaussian_filter1d, maximum_filter1d
 from doodle.core.profiles import min_jerk
 from retarget.analysis import foot_contacts
 from retarget.skeleton import FK_BLOCK, Motion, forward_kinematics, kinematics_of
@@ -166,8 +167,6 @@ def pin_feet(motion: Motion, feet: list[int], fade: int = 3, terrain=None, conta
         under_root = terrain.height(original[:, 0][:, [0, 2]]) if ground_y is None else ground_y
         aloft = ~contacts.any(axis=1)
         rise = [np.where(aloft, 0.0, terrain.height(original[:, a][:, [0, 2]]) - under_root) for a in feet]
-        from scipy.ndimage import gaussian_filter1d
-
         rise = [gaussian_filter1d(r, 1.0, mode="nearest") for r in rise]  # eased into and out of a flight
     targets, weights, helds = [], [], []
     for k, ankle in enumerate(feet):
@@ -367,8 +366,6 @@ def _lower_to_reach(motion: Motion, positions: np.ndarray, feet: list[int], targ
                     in_place: bool = False) -> Motion:
     """The root lowered, eased, wherever a pinned foot's spot is out of its straight leg's
     reach (a foot on ground lower than the root's, a style that lifted the body)."""
-    from scipy.ndimage import gaussian_filter1d, maximum_filter1d
-
     need = np.zeros(motion.frames)
     for ankle, target, weight in zip(feet, targets, weights):
         knee = int(motion.skeleton.parents[ankle])
@@ -394,8 +391,6 @@ def clamp_to_ground(motion: Motion, terrain=None, in_place: bool = False) -> Mot
     above the pelvis does not count) is below the ground (``terrain``; flat y = 0 when
     None); the lift is eased in and out over a few frames. ``in_place``: ``motion``'s
     translations are changed rather than copied (a motion nothing else holds)."""
-    from scipy.ndimage import gaussian_filter1d, maximum_filter1d
-
     from retarget.analysis import pelvis_of
     from retarget.skeleton import end_site_positions
 

@@ -20,6 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial.transform import Rotation
 
+from doodle.core.filters import gaussian_filter1d
 from retarget.skeleton import Motion, Skeleton, end_site_positions, forward_kinematics, per_motion
 from retarget.trajectory import Span
 
@@ -216,8 +217,6 @@ def paced(motion: Motion, clip_in: float, clip_out: float | None, duration: floa
         c = (lo + hi) / 2
         lo, hi = (c, hi) if np.maximum(c * step, least).sum() < duration else (lo, c)
     out = np.maximum(hi * step, least)
-    from scipy.ndimage import gaussian_filter1d
-
     for _ in range(3):  # the rate eased from squeezed to not (no lurch where a hold meets a swing)
         out = np.maximum(gaussian_filter1d(out, 2.0, mode="nearest"), least)
         spare = out - least  # the time over the limit each step has: the excess comes out of it

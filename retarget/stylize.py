@@ -38,12 +38,11 @@ from __future__ import annotations
 from dataclasses import replace
 
 import numpy as np
-from scipy.interpolate import PchipInterpolator
-from scipy.ndimage import gaussian_filter1d, maximum_filter1d
-from scipy.sparse import csr_matrix
 
 from doodle.core import quat
+from doodle.core.filters import gaussian_filter1d, maximum_filter1d
 from doodle.core.quat import make_continuous
+from doodle.core.splines import PchipInterpolator
 from retarget.analysis import Stages, foot_contacts, guess_roles, partition, pelvis_of
 from retarget.effort_signature import FASTEST, RATE, burst, most_moving, speed_profile
 from retarget.feet import two_bone_ik
@@ -292,8 +291,7 @@ def _retimed(motion: Motion, clip_to_out, oversample: int = 1) -> tuple[Motion, 
 
 def _catmull_rom(frames: np.ndarray, f: np.ndarray) -> np.ndarray:
     """Frames (F, ...) at fractional frame indices ``f``: the Catmull–Rom spline through
-    them (C¹, passes through every frame, ends clamped), as one sparse matrix product —
-    four weights per output row."""
+    them (C¹, passes through every frame, ends clamped): four weighted frames per output."""
     last = len(frames) - 1
     f = np.clip(f, 0.0, last)
     k = np.minimum(np.floor(f).astype(int), max(last - 1, 0))
@@ -302,9 +300,11 @@ def _catmull_rom(frames: np.ndarray, f: np.ndarray) -> np.ndarray:
     weights = np.stack([0.5 * (-u + 2 * u2 - u3), 0.5 * (2 - 5 * u2 + 3 * u3),
                         0.5 * (u + 4 * u2 - 3 * u3), 0.5 * (u3 - u2)], axis=1)
     cols = np.clip(k[:, None] + np.arange(-1, 3)[None], 0, last)
-    rows = np.repeat(np.arange(len(f)), 4)
-    w = csr_matrix((weights.ravel(), (rows, cols.ravel())), shape=(len(f), len(frames)))
-    return (w @ frames.reshape(len(frames), -1)).reshape((len(f),) + frames.shape[1:])
+    flat = frames.reshape(len(frames), -1)
+    out = weights[:, :1] * flat[cols[:, 0]]
+    for tap in range(1, 4):
+        out += weights[:, tap:tap + 1] * flat[cols[:, tap]]
+    return out.reshape((len(f),) + frames.shape[1:])
 
 
 def _oversample(motion: Motion) -> int:

@@ -24,7 +24,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.ndimage import gaussian_filter1d
+
+from doodle.core.filters import gaussian_filter1d
 
 
 @dataclass(frozen=True)

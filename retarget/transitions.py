@@ -19,9 +19,9 @@ from __future__ import annotations
 from functools import lru_cache
 
 import numpy as np
-from scipy.ndimage import minimum_filter
 from scipy.spatial.transform import Rotation
 
+from doodle.core.filters import minimum_filter
 from retarget.analysis import Stages
 from retarget.skeleton import Motion, forward_kinematics
 

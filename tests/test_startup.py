@@ -130,7 +130,8 @@ def test_the_front_of_quaternions_equals_scipys_to_the_bit():
 
 # --- what is imported ---------------------------------------------------------------------------
 
-HEAVY = ("pandas", "sklearn", "scipy.signal", "scipy.stats", "matplotlib", "trimesh", "hmmlearn.hmm")
+HEAVY = ("pandas", "sklearn", "scipy.signal", "scipy.stats", "scipy.ndimage", "scipy.interpolate", "matplotlib",
+         "trimesh", "hmmlearn.hmm")  # scipy.sparse too, once scipy.spatial (Rotation) is gone
 
 
 def _imported(code: str, tmp_path) -> set:

@@ -176,7 +176,7 @@ def clips_key(library, user, use_builtin: bool) -> str | None:
     """The key of a library's analysed clips: its definitions, the user library's and the
     built-in one's, and the contents of every file they name; None when a file cannot be
     read (the compile then reports it)."""
-    import scipy  # the analysis runs on it (retarget.analysis, retarget.clips); imported by them anyway
+    import scipy  # the analysis still runs on its Rotation (retarget.skeleton, retarget.clips), imported by them anyway
 
     from library.manifest import builtin
 

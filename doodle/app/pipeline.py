@@ -13,6 +13,7 @@ import numpy as np
 
 from doodle.core import quat
 from doodle.core.errors import DoodleError
+from doodle.core.filters import gaussian_filter1d
 from doodle.core.model import Doodle
 from doodle.input.repair import repaired
 from doodle.input.segmenter import SegmenterParams
@@ -455,8 +456,6 @@ def _eased(heading: np.ndarray, fps: float) -> np.ndarray:
     """The character's heading per frame with its changes eased over a few frames: where
     the path's direction jumps (a walk starting from a standstill facing elsewhere) the
     body turns over about half a second instead of in one frame."""
-    from scipy.ndimage import gaussian_filter1d
-
     sigma = TURN_EASE_S * fps
     return gaussian_filter1d(heading, sigma, mode="nearest") if sigma >= 0.5 and len(heading) > 1 else heading
 
