@@ -230,3 +230,14 @@ def test_a_library_without_a_clip_for_an_action_says_which_segments_play_a_retar
                             "retargeted onto it (c0 4.") for s in said), said
     assert not any("rest pose" in s for s in said), said
     assert not any("no clip of Walk " in s for s in said)
+
+
+def test_recognised_qualities_are_applied_on_a_grid_so_a_long_doodle_shares_its_stylised_clips():
+    from doodle.app.pipeline import STYLE_STEP, _on_grid
+
+    for value in (-1.0, -0.663, -0.012, 0.0, 0.024, 0.968, 0.989, 1.0):
+        on = _on_grid(value)
+        assert abs(on - value) <= STYLE_STEP / 2 + 1e-12
+        assert abs(on / STYLE_STEP - round(on / STYLE_STEP)) < 1e-9
+        assert repr(on) == repr(round(on, 2))  # written to the report as the value applied
+    assert repr(_on_grid(-0.01)) == "0.0"  # never -0.0: the same stylised clip as 0.0
