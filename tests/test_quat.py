@@ -150,6 +150,8 @@ def test_euler_orders_are_checked():
             quat.as_euler(np.array([0.0, 0.0, 0.0, 1.0]), bad)
     with pytest.raises(ValueError):
         quat.from_euler("ZQ", [1.0, 2.0])
+    with pytest.raises(ValueError):
+        quat.as_euler(np.array([[0.0, 0.0, 0.0, 1.0], [0.0, 0.0, 0.0, 0.0]]), "ZXY")  # a zero quaternion, as in scipy
 
 
 def test_slerp_between_two_rotations_equals_scipys():

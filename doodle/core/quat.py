@@ -232,23 +232,27 @@ def from_euler(order: str, angles, degrees: bool = False) -> np.ndarray:
 
 def as_euler(q, order: str, degrees: bool = False) -> np.ndarray:
     """Intrinsic Euler angles (..., 3) in ``order`` (three different axes, e.g. "ZXY") of
-    quaternions (..., 4), normalised first: scipy's ``as_euler(order, degrees)`` with its
-    branches (Bernardes & Viollet 2022) — angles in [-π, π], the middle one in [-π/2, π/2];
-    at gimbal lock (middle angle within 1e-7 rad of ±π/2) the last angle is 0 and the first
-    carries the turn — without its warning."""
+    quaternions (..., 4) of any length but zero: scipy's ``as_euler(order, degrees)`` with
+    its branches (Bernardes & Viollet 2022) — angles in [-π, π], the middle one in
+    [-π/2, π/2]; at gimbal lock (middle angle within 1e-7 rad of ±π/2) the last angle is 0
+    and the first carries the turn — without its warning."""
     axes = _axes(order, (3,))
     if len(set(axes)) != 3:
         raise ValueError(f"expected three different axes, got {order!r}")
-    q = unit(q)
+    q = np.asarray(q, dtype=float)
     k, j, i = axes  # the paper's extrinsic sequence: the intrinsic one reversed
     odd = (i - j) * (j - k) * (k - i) < 0
-    w, qi, qj, qk = q[..., 3], q[..., i], q[..., j], q[..., k]
+    qt = q.reshape(-1, 4).T
+    w, qi, qj, qk = qt[3], qt[i], qt[j], qt[k]
     if odd:
         qk = -qk
-    a, b, c, d = w - qj, qi + qk, qj + w, qk - qi
-    out = np.empty(q.shape[:-1] + (3,))
-    first, middle, last = out[..., 0], out[..., 1], out[..., 2]
-    np.arctan2(np.sqrt(c * c + d * d), np.sqrt(a * a + b * b), out=middle)  # hypots: np.hypot is 7× slower
+    a, b, c, d = w - qj, qi + qk, qj + w, qk - qi  # the angles depend on their ratios only: no normalising
+    ab, cd = np.sqrt(a * a + b * b), np.sqrt(c * c + d * d)  # hypots (np.hypot is 7× slower)
+    if not (ab + cd).all():
+        raise ValueError("Found zero norm quaternions in `quat`.")
+    out = np.empty((3, len(w)))  # one row per angle: contiguous work
+    first, middle, last = out
+    np.arctan2(cd, ab, out=middle)
     middle *= 2
     half_sum, half_diff = np.arctan2(b, a), np.arctan2(d, c)
     np.add(half_sum, half_diff, out=first)
@@ -261,10 +265,12 @@ def as_euler(q, order: str, degrees: bool = False) -> np.ndarray:
     if odd:
         np.negative(first, out=first)
     middle -= np.pi / 2
-    ends = out[..., ::2]
+    ends = out[::2]
     np.add(ends, 2 * np.pi, out=ends, where=ends < -np.pi)
     np.subtract(ends, 2 * np.pi, out=ends, where=ends > np.pi)
-    return np.rad2deg(out, out=out) if degrees else out
+    if degrees:
+        np.rad2deg(out, out=out)
+    return np.ascontiguousarray(out.T).reshape(q.shape[:-1] + (3,))
 
 
 def slerp(a, b, w) -> np.ndarray:
