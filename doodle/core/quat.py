@@ -173,27 +173,24 @@ def from_matrix(m) -> np.ndarray:
     m = m.reshape(-1, 3, 3)
     if np.any(np.linalg.det(m) <= 0):
         raise ValueError("Non-positive determinant (left-handed or null coordinate frame) in rotation matrix.")
-    gram = m @ np.transpose(m, (0, 2, 1))
-    bent = ~np.all(np.isclose(gram, np.eye(3), atol=1e-12), axis=(1, 2))
+    eye = np.eye(3)
+    bent = (np.abs(m @ np.transpose(m, (0, 2, 1)) - eye) > 1e-12 + 1e-5 * eye).any(axis=(1, 2))  # np.isclose's test
     if bent.any():
         u, _, vt = np.linalg.svd(m[bent])
         m[bent] = u @ vt
+    mt = np.transpose(m, (0, 2, 1))
+    sym, skew = m + mt, m - mt
+    diagonal = np.arange(3)
     trace = m[:, 0, 0] + m[:, 1, 1] + m[:, 2, 2]
-    choice = np.argmax(np.stack([m[:, 0, 0], m[:, 1, 1], m[:, 2, 2], trace], axis=1), axis=1)
-    q = np.empty((len(m), 4))
-    for i in range(3):  # a diagonal element is the largest
-        j, k = (i + 1) % 3, (i + 2) % 3
-        pick = choice == i
-        s = m[pick]
-        q[pick, i] = 1 - trace[pick] + 2 * s[:, i, i]
-        q[pick, j] = s[:, j, i] + s[:, i, j]
-        q[pick, k] = s[:, k, i] + s[:, i, k]
-        q[pick, 3] = s[:, k, j] - s[:, j, k]
-    pick = choice == 3  # the trace is
-    s = m[pick]
-    q[pick] = np.stack([s[:, 2, 1] - s[:, 1, 2], s[:, 0, 2] - s[:, 2, 0], s[:, 1, 0] - s[:, 0, 1], 1 + trace[pick]],
-                       axis=1)
-    return normalise(q).reshape(shape + (4,))
+    vector = np.stack([skew[:, 2, 1], skew[:, 0, 2], skew[:, 1, 0]], axis=1)
+    candidates = np.empty((len(m), 4, 4))  # row i: the formula when m[i, i] is the largest, row 3: the trace
+    candidates[:, :3, :3] = sym
+    candidates[:, diagonal, diagonal] += (1 - trace)[:, None]
+    candidates[:, :3, 3] = vector
+    candidates[:, 3, :3] = vector
+    candidates[:, 3, 3] = 1 + trace
+    choice = np.argmax(np.concatenate([m[:, diagonal, diagonal], trace[:, None]], axis=1), axis=1)
+    return normalise(candidates[np.arange(len(m)), choice]).reshape(shape + (4,))
 
 
 _AXIS = {"X": 0, "Y": 1, "Z": 2}
