@@ -132,8 +132,7 @@ def _turns(q_from, q_walk, q_to, n: int) -> np.ndarray:
     fifth, walk, turn to the final heading over its last fifth (the thesis's π-rotated way
     back, §6.2.2)."""
     k = max(1, n // 5)
-    u = min_jerk(np.linspace(0.0, 1.0, k))
-    u = np.clip(u, 0.0, 1.0)
+    u = np.clip(min_jerk(np.linspace(0.0, 1.0, k)), 0.0, 1.0)
     return np.concatenate([quat.slerp(q_from, q_walk, u), np.repeat(np.asarray(q_walk)[None], n - 2 * k, axis=0),
                            quat.slerp(q_walk, q_to, u)])
 
