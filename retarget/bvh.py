@@ -51,7 +51,8 @@ the same correctly rounded values as ``float()`` on each field, and as pandas' C
 ``../shared/data``; a 5 MB clip reads ~10 % slower than with pandas, a short clip ~30 %
 faster, and pandas' import, a quarter to a third of a second at start-up, is gone) — and
 formatted with vectorised numpy code (digits from a lookup table, no Python per value);
-Euler → quaternion is computed directly in numpy, one call per rotation order. Against
+Euler angles ↔ quaternions are computed in numpy (:mod:`doodle.core.quat`, scipy's results
+without importing scipy.spatial), one call per rotation order. Against
 bvhio (``bench/bvh_speed.py``): reading is several times faster than its bare
 ``readAsBvh`` and 20–60× faster than ``readAsHierarchy``; writing is ~8–20× faster than
 its ``writeBvh``.
@@ -67,12 +68,11 @@ from decimal import ROUND_HALF_EVEN, Decimal
 from pathlib import Path
 
 import numpy as np
-from scipy.spatial.transform import Rotation
-
+from doodle.core import quat
 from doodle.core.errors import DoodleError, where
 from retarget.skeleton import POSITION_CHANNELS, ROTATION_CHANNELS, Motion, Skeleton
 
-__all__ = ["read_bvh", "read_bvh_with_unit", "guess_unit", "write_bvh", "format_bvh", "euler_to_quat"]
+__all__ = ["read_bvh", "read_bvh_with_unit", "guess_unit", "write_bvh", "format_bvh"]
 
 _CHANNELS = {name.lower(): name for name in POSITION_CHANNELS + ROTATION_CHANNELS}
 _FRAMES_RE = re.compile(r"^\s*Frames\s*:\s*(\S*)\s*$")
@@ -187,40 +187,12 @@ def _parse(text: str, source: str, unit: float | None) -> tuple[Motion, float]:
             cols += [col + i for i, c in enumerate(chans) if c in ROTATION_CHANNELS]
         col += len(chans)
     for order, (ks, cols) in by_order.items():  # all joints with one order in one go
-        rotations[:, ks] = euler_to_quat(order, data[:, cols].reshape(-1, 3)).reshape(frames, len(ks), 4)
+        angles = data[:, cols].reshape(-1, 3)
+        rotations[:, ks] = quat.from_euler(order, angles, degrees=True).reshape(frames, len(ks), 4)
     translations *= unit
     end_sites = {k: j.end_site * unit for k, j in enumerate(joints) if j.end_site is not None}
     skeleton = Skeleton(names, parents, offsets * unit, tuple(j.channels for j in joints), end_sites)
     return Motion(skeleton, translations, rotations, frame_time), unit
-
-
-_AXIS = {"X": 0, "Y": 1, "Z": 2}
-
-
-def euler_to_quat(order: str, degrees: np.ndarray) -> np.ndarray:
-    """Quaternions (x, y, z, w), shape (F, 4), of intrinsic rotations in ``order`` (e.g.
-    ``"ZXY"``: R = Rz(a)·Rx(b)·Ry(c)) by the angles ``degrees`` (F, len(order)).
-
-    The same rotations as ``Rotation.from_euler(order, degrees, degrees=True).as_quat()``,
-    computed directly (scipy's ``from_euler`` costs milliseconds per call in scipy 1.17).
-    """
-    degrees = np.asarray(degrees, dtype=float).reshape(-1, len(order))
-    half = np.radians(degrees) * 0.5
-    sin, cos = np.sin(half), np.cos(half)
-    q = np.zeros((len(degrees), 4))
-    q[:, _AXIS[order[0].upper()]] = sin[:, 0]
-    q[:, 3] = cos[:, 0]
-    for n in range(1, len(order)):
-        # q ← q ⊗ (sin·axis, cos): the Hamilton product with an elementary rotation
-        a = _AXIS[order[n].upper()]
-        b, c = (a + 1) % 3, (a + 2) % 3
-        s, co = sin[:, n], cos[:, n]
-        x = q.copy()
-        q[:, a] = x[:, a] * co + x[:, 3] * s
-        q[:, b] = x[:, b] * co + x[:, c] * s
-        q[:, c] = x[:, c] * co - x[:, b] * s
-        q[:, 3] = x[:, 3] * co - x[:, a] * s
-    return q
 
 
 def _parse_hierarchy(lines: list[str], source: str, motion_line: int | None) -> list[_Joint]:
@@ -558,7 +530,7 @@ def bvh_chunks(motion: Motion, unit: float = 1.0, precision: int = 6, source: st
             raise DoodleError(f"{source}: joint {name!r} has no position channels but its translation differs "
                               f"from its OFFSET; give it position channels")
         if len(chans) == n_pos:
-            angle = Rotation.from_quat(rotations[:, j]).magnitude()
+            angle = quat.magnitude(rotations[:, j])
             if float(angle.max(initial=0.0)) > math.radians(tol):
                 raise DoodleError(f"{source}: joint {name!r} has no rotation channels but rotates")
         layouts.append(chans)
@@ -613,11 +585,9 @@ def _channel_rows(translations: np.ndarray, rotations: np.ndarray, layouts: list
     positions in file units, Euler angles in degrees."""
     n_frames = len(translations)
     angles: dict[int, np.ndarray] = {}
-    for order in set(orders) - {""}:  # one scipy call per distinct order, all its joints at once
+    for order in set(orders) - {""}:  # one call per distinct order, all its joints at once
         js = [j for j, o in enumerate(orders) if o == order]
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")  # gimbal lock: the rotation is still represented exactly
-            e = Rotation.from_quat(rotations[:, js].reshape(-1, 4)).as_euler(order, degrees=True)
+        e = quat.as_euler(rotations[:, js].reshape(-1, 4), order, degrees=True)
         e = e.reshape(n_frames, len(js), 3)
         angles.update((j, e[:, n]) for n, j in enumerate(js))
     data = np.empty((n_frames, sum(len(c) for c in layouts)))

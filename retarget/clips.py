@@ -19,8 +19,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.spatial.transform import Rotation
 
+from doodle.core import quat
 from doodle.core.errors import DoodleError
 from library.manifest import ROLES, ActionDef, Library
 from retarget.analysis import (Stages, cycle_length, facing_yaw, feet_low, foot_contacts, guess_roles, stages,
@@ -69,20 +69,20 @@ def face_front(motion: Motion) -> Motion:
     yaw = facing_yaw(motion)
     if abs(yaw) <= FRONT_TOLERANCE:
         return motion
-    turn = Rotation.from_rotvec([0.0, -yaw, 0.0])
+    turn = quat.exp(np.array([0.0, -yaw, 0.0]))
     pelvis = guess_roles(motion.skeleton).get("pelvis", 0)
     parent = int(motion.skeleton.parents[pelvis])
     trans, rots = motion.translations.copy(), motion.rotations.copy()
-    local = Rotation.from_quat(motion.rotations[:, pelvis])
+    local = motion.rotations[:, pelvis]
     if parent < 0:
-        trans[:, pelvis] = turn.apply(motion.translations[:, pelvis])
-        rots[:, pelvis] = (turn * local).as_quat()
+        trans[:, pelvis] = quat.rotate(turn, motion.translations[:, pelvis])
+        rots[:, pelvis] = quat.compose(turn, local)
     else:
         positions, world = forward_kinematics(motion)
-        up_pos, up_rot = positions[:, parent], Rotation.from_quat(world[:, parent])
-        at = up_pos + up_rot.apply(motion.translations[:, pelvis])
-        trans[:, pelvis] = up_rot.inv().apply(turn.apply(at) - up_pos)
-        rots[:, pelvis] = (up_rot.inv() * turn * up_rot * local).as_quat()
+        up_pos, up_rot = positions[:, parent], quat.unit(world[:, parent])
+        at = up_pos + quat.rotate(up_rot, motion.translations[:, pelvis])
+        trans[:, pelvis] = quat.rotate_inverse(up_rot, quat.rotate(turn, at) - up_pos)
+        rots[:, pelvis] = quat.compose(quat.conjugate(up_rot), turn, up_rot, local)
     return Motion(motion.skeleton, trans, rots, motion.frame_time)
 
 
@@ -99,7 +99,7 @@ def on_floor(motion: Motion) -> Motion:
     if parent < 0:
         trans[:, pelvis] += down
     else:
-        trans[:, pelvis] += Rotation.from_quat(forward_kinematics(motion)[1][:, parent]).inv().apply(down)
+        trans[:, pelvis] += quat.rotate_inverse(quat.unit(forward_kinematics(motion)[1][:, parent]), down)
     return Motion(motion.skeleton, trans, motion.rotations, motion.frame_time)
 
 

@@ -18,6 +18,7 @@ from dataclasses import replace
 
 import numpy as np
 
+from doodle.core import quat
 from doodle.core.arap import deform
 from doodle.core.filters import gaussian_filter1d
 from retarget.analysis import guess_roles
@@ -79,10 +80,8 @@ def reach(motion: Motion, target, frame: int, side: str = "right", ease_s: float
 def facing_frame(motion: Motion, world=None) -> np.ndarray:
     """(F, 3, 3) per frame the pelvis's ground frame — columns right, up, front — from the
     root's heading (a clip faces +z; its right is −x)."""
-    from scipy.spatial.transform import Rotation
-
     rotations = (world if world is not None else forward_kinematics(motion))[1]
-    front = Rotation.from_quat(rotations[:, 0]).apply([0.0, 0.0, 1.0]) * [1.0, 0.0, 1.0]
+    front = quat.front(rotations[:, 0]) * [1.0, 0.0, 1.0]
     front /= np.maximum(np.linalg.norm(front, axis=1, keepdims=True), 1e-9)
     up = np.tile([0.0, 1.0, 0.0], (len(front), 1))
     return np.stack([np.cross(front, up), up, front], axis=2)

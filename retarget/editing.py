@@ -6,8 +6,8 @@ import re
 from dataclasses import replace
 
 import numpy as np
-from scipy.spatial.transform import Rotation, Slerp
 
+from doodle.core import quat
 from retarget.skeleton import Motion, Skeleton
 
 _SIDES = [(r"Left", "Right"), (r"left", "right"), (r"_L\b", "_R"), (r"_l\b", "_r"), (r"\bL_", "R_"), (r"\bl_", "r_"),
@@ -29,8 +29,7 @@ def resample(motion: Motion, fps: float) -> Motion:
     if motion.frames == 1:
         rots = motion.rotations.copy()
     else:
-        rots = np.stack([Slerp(old_t, Rotation.from_quat(motion.rotations[:, j]))(new_t).as_quat()
-                         for j in range(len(motion.skeleton))], axis=1)
+        rots = quat.slerp_keys(old_t, motion.rotations, new_t)
     return replace(motion, translations=trans, rotations=rots, frame_time=1.0 / fps)
 
 

@@ -8,14 +8,15 @@ turns them by the path's heading), so a root's heading is its rotation applied t
 from __future__ import annotations
 
 import numpy as np
-from scipy.spatial.transform import Rotation
+
+from doodle.core import quat
 
 UP = np.array([0.0, 1.0, 0.0])
 
 
 def heading(root_rotation) -> np.ndarray:
     """Unit ground-plane front of a root rotation (xyzw)."""
-    f = Rotation.from_quat(root_rotation).apply([0.0, 0.0, 1.0]) * [1.0, 0.0, 1.0]
+    f = quat.front(np.asarray(root_rotation, dtype=float)) * [1.0, 0.0, 1.0]
     return f / max(float(np.linalg.norm(f)), 1e-9)
 
 

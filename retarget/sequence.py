@@ -17,9 +17,10 @@ joined by blended transitions, into one motion on one timeline.
 from __future__ import annotations
 
 from dataclasses import dataclass
-import numpy as np
-from scipy.spatial.transform import Rotation
 
+import numpy as np
+
+from doodle.core import quat
 from doodle.core.filters import gaussian_filter1d
 from retarget.skeleton import Motion, Skeleton, end_site_positions, forward_kinematics, per_motion
 from retarget.trajectory import Span
@@ -122,8 +123,6 @@ def feet_around_pelvis(motion: Motion, pelvis: int, feet) -> np.ndarray:
 @per_motion
 def _feet_around_pelvis(motion: Motion, pelvis: int, feet: tuple) -> np.ndarray:
     positions, rotations = forward_kinematics(motion)
-    from doodle.core import quat
-
     front = quat.rotate(rotations[:, pelvis], np.tile([0.0, 0.0, 1.0], (motion.frames, 1)))
     yaw = np.arctan2(front[:, 0], front[:, 2])
     rel = positions[:, list(feet)][:, :, [0, 2]] - positions[:, [pelvis]][:, :, [0, 2]]
@@ -232,7 +231,7 @@ def pose_at(placed: Placed, t: np.ndarray, path_xz: np.ndarray, heading: np.ndar
     trans, rots = _sample(placed.motion, clip_time(placed, t))
     p = placed.pelvis
     parents = placed.motion.skeleton.parents
-    yaw = Rotation.from_rotvec(np.outer(heading, [0.0, 1.0, 0.0]))
+    yaw = quat.exp(np.outer(heading, [0.0, 1.0, 0.0]))
     # the pelvis carries the character: its horizontal position follows the path, its
     # height and tilt come from the clip; the clip's own travel is replaced (in-place
     # actions keep their sway around the spot)
@@ -247,11 +246,11 @@ def pose_at(placed: Placed, t: np.ndarray, path_xz: np.ndarray, heading: np.ndar
     lift = np.zeros(len(t)) if ground_y is None else ground_y
     ground = np.column_stack([path_xz[:, 0], lift, path_xz[:, 1]])
     if parents[p] < 0:  # the pelvis is the root: it takes the path and the heading
-        moved = yaw.apply(sway3)
+        moved = quat.rotate(yaw, sway3)
         trans[:, p, 0] = ground[:, 0] + moved[:, 0]
         trans[:, p, 1] += lift
         trans[:, p, 2] = ground[:, 2] + moved[:, 2]
-        rots[:, p] = (yaw * Rotation.from_quat(rots[:, p])).as_quat()
+        rots[:, p] = quat.compose(yaw, rots[:, p])
         return trans, rots
     # helper joints above the pelvis (Bandai's joint_Root): the top one takes the path and
     # the heading, the others are neutral, the pelvis keeps its height, tilt and sway
@@ -261,7 +260,7 @@ def pose_at(placed: Placed, t: np.ndarray, path_xz: np.ndarray, heading: np.ndar
         rots[:, a] = (0.0, 0.0, 0.0, 1.0)
         a = parents[a]
     trans[:, 0] = ground
-    rots[:, 0] = yaw.as_quat()
+    rots[:, 0] = yaw
     trans[:, p, 0] = sway3[:, 0]
     trans[:, p, 2] = sway3[:, 2]
     return trans, rots

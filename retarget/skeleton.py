@@ -17,7 +17,8 @@ from dataclasses import dataclass, field, replace
 from functools import lru_cache, wraps
 
 import numpy as np
-from scipy.spatial.transform import Rotation
+
+from doodle.core import quat
 
 POSITION_CHANNELS = ("Xposition", "Yposition", "Zposition")
 ROTATION_CHANNELS = ("Xrotation", "Yrotation", "Zrotation")
@@ -244,5 +245,7 @@ def end_site_positions(motion: Motion, world: tuple[np.ndarray, np.ndarray] | No
                        joints=None) -> dict[int, np.ndarray]:
     """World positions (F, 3) of each End Site, by its joint (only those of ``joints``, if given)."""
     positions, rotations = world if world is not None else forward_kinematics(motion)
-    return {j: positions[:, j] + Rotation.from_quat(rotations[:, j]).apply(off)
+    # the offset turned by the rotation matrix, scipy's Rotation.apply to the bit: a compile's
+    # output follows these positions to the last printed digit (quat.rotate differs in the last bit)
+    return {j: positions[:, j] + np.einsum("ijk,k->ij", quat.as_matrix(rotations[:, j]), off)
             for j, off in motion.skeleton.end_sites.items() if joints is None or j in joints}

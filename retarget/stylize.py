@@ -205,7 +205,7 @@ def _restore_contacts(before: Motion, after: Motion, world=None, clip_frames: np
         target[:, 1] = ankle_at[:, 1]
         if weight.any():
             turned = world[1].copy()  # the foot as it stood in ``before``: its toes neither swing nor slide
-            turned[:, ankle] = _slerp(world[1][:, ankle], _at(old_rot[:, ankle], f), weight)
+            turned[:, ankle] = quat.slerp(world[1][:, ankle], _at(old_rot[:, ankle], f), weight)
             after = two_bone_ik(after, hip, knee, ankle, target, weight, world=(world[0], turned))
     return after
 
@@ -231,14 +231,7 @@ def _at(q: np.ndarray, f: np.ndarray) -> np.ndarray:
     q = make_continuous(q)
     k = np.clip(np.floor(f).astype(int), 0, len(q) - 1)
     n = np.minimum(k + 1, len(q) - 1)
-    return _slerp(q[k], q[n], np.clip(f - k, 0.0, 1.0))
-
-
-def _slerp(a: np.ndarray, b: np.ndarray, w: np.ndarray) -> np.ndarray:
-    """Per frame, from rotation ``a`` (F, 4) towards ``b`` by ``w`` (F,)."""
-    d = quat.multiply(b, quat.conjugate(a))
-    d = np.where(d[:, 3:4] < 0, -d, d)
-    return quat.multiply(quat.exp(quat.log(d) * np.asarray(w, dtype=float)[:, None]), a)
+    return quat.slerp(q[k], q[n], np.clip(f - k, 0.0, 1.0))
 
 
 def _runs(mask: np.ndarray) -> list[tuple[int, int]]:

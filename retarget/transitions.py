@@ -19,8 +19,8 @@ from __future__ import annotations
 from functools import lru_cache
 
 import numpy as np
-from scipy.spatial.transform import Rotation
 
+from doodle.core import quat
 from doodle.core.filters import minimum_filter
 from retarget.analysis import Stages
 from retarget.skeleton import Motion, forward_kinematics
@@ -39,7 +39,7 @@ def frame_features(motion: Motion, pelvis: int) -> np.ndarray:
 def _frame_features(motion: Motion, pelvis: int) -> np.ndarray:
     positions, rotations = forward_kinematics(motion)
     rel = positions - positions[:, pelvis : pelvis + 1]
-    forward = Rotation.from_quat(rotations[:, pelvis]).apply([0.0, 0.0, 1.0])
+    forward = quat.front(rotations[:, pelvis])
     yaw = np.arctan2(forward[:, 0], forward[:, 2])
     c, s = np.cos(yaw)[:, None], np.sin(yaw)[:, None]  # turned by −yaw about y, every frame at once
     rel = np.stack([c * rel[..., 0] - s * rel[..., 2], rel[..., 1], s * rel[..., 0] + c * rel[..., 2]], axis=-1)

@@ -1,7 +1,6 @@
 """BVH reader and writer (retarget.bvh): round trips on the real mocap files, agreement with
 the independent reader bvhio, channel orders, exact frame time, and clear errors."""
 
-import itertools
 import os
 from dataclasses import replace
 from pathlib import Path
@@ -11,8 +10,7 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from doodle.core.errors import DoodleError
-from retarget.bvh import (_format_rows, euler_to_quat, format_bvh, guess_unit, read_bvh,
-                          read_bvh_with_unit, write_bvh)
+from retarget.bvh import _format_rows, format_bvh, guess_unit, read_bvh, read_bvh_with_unit, write_bvh
 from retarget.skeleton import end_site_positions, forward_kinematics
 
 MOCAP = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "mocap"
@@ -258,15 +256,6 @@ def test_units(tmp_path):
     # writing in centimetres gives back the file's numbers
     write_bvh(tmp_path / "cm.bvh", cm, unit=0.01)
     assert "OFFSET 0 10 0\n" in (tmp_path / "cm.bvh").read_text()
-
-
-def test_euler_to_quat_matches_scipy():
-    rng = np.random.default_rng(1)
-    angles = np.vstack([rng.uniform(-400, 400, (200, 3)), [[0, 90, 0], [45, -90, 10], [180, 0, -180]]])
-    for order in map("".join, itertools.permutations("XYZ")):
-        ours = Rotation.from_quat(euler_to_quat(order, angles))
-        theirs = Rotation.from_euler(order, angles, degrees=True)
-        assert (ours * theirs.inv()).magnitude().max() < 1e-12
 
 
 def test_motion_block_formatting_matches_printf():

@@ -130,8 +130,8 @@ def test_the_front_of_quaternions_equals_scipys_to_the_bit():
 
 # --- what is imported ---------------------------------------------------------------------------
 
-HEAVY = ("pandas", "sklearn", "scipy.signal", "scipy.stats", "scipy.ndimage", "scipy.interpolate", "matplotlib",
-         "trimesh", "hmmlearn.hmm")  # scipy.sparse too, once scipy.spatial (Rotation) is gone
+HEAVY = ("pandas", "sklearn", "scipy.signal", "scipy.stats", "scipy.ndimage", "scipy.interpolate", "scipy.sparse",
+         "scipy.spatial", "scipy.optimize", "scipy.linalg", "matplotlib", "trimesh", "hmmlearn.hmm")
 
 
 def _imported(code: str, tmp_path) -> set:
@@ -162,6 +162,33 @@ def test_recognising_from_the_cache_imports_no_scipy(tmp_path):
     _imported(code, tmp_path)  # the automata cached
     mods = _imported(code, tmp_path)
     assert not {m for m in mods if m.split(".")[0] in ("scipy", "lark", "pandas", "sklearn")}
+
+
+def _scipy_spatial_imports(module: str) -> list[str]:
+    """The scipy.spatial modules a module of ours imports anywhere in its source."""
+    import ast
+
+    path = ROOT.joinpath(*module.split("."))
+    path = path.with_suffix(".py") if path.with_suffix(".py").is_file() else path / "__init__.py"
+    found = []
+    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+        names = [a.name for a in node.names] if isinstance(node, ast.Import) else (
+            [node.module or ""] if isinstance(node, ast.ImportFrom) else [])
+        found += [n for n in names if n == "scipy.spatial" or n.startswith("scipy.spatial.")]
+    return found
+
+
+def test_compiling_recognising_and_replaying_use_no_scipy_spatial(tmp_path):
+    """Rotations on these paths are doodle.core.quat's: none of the modules they import
+    imports scipy.spatial (a 0.4 s import), but for the KD-tree of a mesh terrain
+    (retarget.terrain, imported when a mesh is sampled)."""
+    code = (f"from doodle.app.cli.main import main; main(['compile', {str(DEMO)!r}, '-o', {str(tmp_path / 'out')!r}])\n"
+            f"main(['recognize', {str(DEMO)!r}]); main(['replay', {str(DEMO)!r}, '--speed', '0'])")
+    mods = _imported(code, tmp_path)
+    ours = sorted(m for m in mods if m.split(".")[0] in ("doodle", "grammar", "laban", "retarget", "library"))
+    assert {"retarget.bvh", "retarget.sequence", "doodle.app.placement", "doodle.app.replay"} <= set(ours)
+    found = {m: _scipy_spatial_imports(m) for m in ours}
+    assert {m: f for m, f in found.items() if f} == {"retarget.terrain": ["scipy.spatial"]}
 
 
 # --- the cache ----------------------------------------------------------------------------------

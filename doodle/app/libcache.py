@@ -176,11 +176,9 @@ def clips_key(library, user, use_builtin: bool) -> str | None:
     """The key of a library's analysed clips: its definitions, the user library's and the
     built-in one's, and the contents of every file they name; None when a file cannot be
     read (the compile then reports it)."""
-    import scipy  # the analysis still runs on its Rotation (retarget.skeleton, retarget.clips), imported by them anyway
-
     from library.manifest import builtin
 
-    parts = ["clips", code_version(), scipy.__version__, repr(library), repr(user), use_builtin]
+    parts = ["clips", code_version(), np.__version__, repr(library), repr(user), use_builtin]
     libraries = [library] + ([user] if user is not None else [])
     if use_builtin and user is not None:
         base = builtin()

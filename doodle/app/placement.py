@@ -20,8 +20,8 @@ from __future__ import annotations
 from dataclasses import replace
 
 import numpy as np
-from scipy.spatial.transform import Rotation, Slerp
 
+from doodle.core import quat
 from doodle.core.model import Doodle, Track
 from doodle.core.profiles import min_jerk
 from grammar.contexter import InteractionSegment
@@ -75,13 +75,13 @@ def _place_one(doodle: Doodle, ta: str, a, tb: str, b, scale: float, placement) 
     shift = target - B.p[i0]
     yaw_now = np.arctan2(*ground_front(B.q[i0])[[0, 2]])
     yaw_want = np.arctan2(front[0], front[2]) + np.radians(turn)
-    twist = Rotation.from_rotvec(UP * _wrap(yaw_want - yaw_now))
+    twist = quat.exp(UP * _wrap(yaw_want - yaw_now))
     if np.linalg.norm(shift) * scale < MIN_SHIFT and abs(_wrap(yaw_want - yaw_now)) < np.radians(10):
         return doodle
     seconds = max(MIN_WALK_S, float(np.linalg.norm(shift)) * scale / WALK_SPEED)
     n = max(2, int(round(seconds * doodle.rate)))
     # role 1 during the interaction: moved and turned; then walks in before and out after
-    q_role = (twist * Rotation.from_quat(B.q[i0:i1 + 1])).as_quat()
+    q_role = quat.compose(twist, B.q[i0:i1 + 1])
     moved = replace(B, p=np.concatenate([B.p[:i0], B.p[i0:i1 + 1] + shift, B.p[i1 + 1:]]),
                     q=np.concatenate([B.q[:i0], q_role, B.q[i1 + 1:]]))
     u = min_jerk(np.linspace(0.0, 1.0, n))
@@ -124,7 +124,7 @@ def _facing(q, direction) -> np.ndarray:
     if not np.any(f) or np.linalg.norm(d) < 1e-9:
         return np.asarray(q, dtype=float)
     angle = np.arctan2(d[0], d[2]) - np.arctan2(f[0], f[2])
-    return (Rotation.from_rotvec(UP * _wrap(angle)) * Rotation.from_quat(q)).as_quat()
+    return quat.compose(quat.exp(UP * _wrap(angle)), q)
 
 
 def _turns(q_from, q_walk, q_to, n: int) -> np.ndarray:
@@ -132,13 +132,9 @@ def _turns(q_from, q_walk, q_to, n: int) -> np.ndarray:
     fifth, walk, turn to the final heading over its last fifth (the thesis's π-rotated way
     back, §6.2.2)."""
     k = max(1, n // 5)
-    u = min_jerk(np.linspace(0.0, 1.0, k))
-    return np.concatenate([_slerp(q_from, q_walk, u), np.repeat(np.asarray(q_walk)[None], n - 2 * k, axis=0),
-                           _slerp(q_walk, q_to, u)])
-
-
-def _slerp(q0, q1, u) -> np.ndarray:
-    return Slerp([0.0, 1.0], Rotation.from_quat([q0, q1]))(np.clip(u, 0.0, 1.0)).as_quat()
+    u = np.clip(min_jerk(np.linspace(0.0, 1.0, k)), 0.0, 1.0)
+    return np.concatenate([quat.slerp(q_from, q_walk, u), np.repeat(np.asarray(q_walk)[None], n - 2 * k, axis=0),
+                           quat.slerp(q_walk, q_to, u)])
 
 
 def _wrap(angle: float) -> float:
@@ -160,10 +156,10 @@ def stand_in_front(track: Track, at: int, where, heading: float, here, facing: f
     p, q = track.p.copy(), track.q.copy()
     if still:
         turn = _wrap(heading + np.pi - facing)
-        yaw = Rotation.from_rotvec(UP * turn)
+        yaw = quat.exp(UP * turn)
         pivot = p[at] * [1.0, 0.0, 1.0]
-        p = yaw.apply(p - pivot) + pivot + shift
-        q = (yaw * Rotation.from_quat(q)).as_quat()
+        p = quat.rotate(yaw, p - pivot) + pivot + shift
+        q = quat.compose(yaw, q)
         return replace(track, p=p, q=q)
     start = float(track.t[at]) - walk_s
     u = np.clip((track.t - start) / max(walk_s, 1e-9), 0.0, 1.0)

@@ -84,10 +84,7 @@ def calibrate_mount(track: Track, still_s: float = 0.5, min_push: float = 0.02) 
     front = d[far] / reach[far]
     up = np.array([0.0, 1.0, 0.0])
     target = np.column_stack([np.cross(up, front), up, front])  # columns: figurine x, y, z
-    from scipy.spatial.transform import Rotation  # calibration only
-
-    r_rest = Rotation.from_quat(q_rest).as_matrix()
-    return tuple(Rotation.from_matrix(r_rest.T @ target).as_quat().tolist())
+    return tuple(quat.from_matrix(quat.as_matrix(q_rest).T @ target).tolist())
 
 
 def mount_doodle(doodle: Doodle, mounts: dict[str, tuple]) -> Doodle:

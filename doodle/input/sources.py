@@ -25,6 +25,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from doodle.core import quat
 from doodle.input.conventions import to_ours
 from doodle.core.errors import DoodleError
 from doodle.core.model import Doodle
@@ -111,10 +112,8 @@ def pose_from_matrix(m) -> tuple[np.ndarray, np.ndarray]:
     (:mod:`doodle.input.conventions`, ``openvr``) applies to the world and the device's own axes, so
     a controller pointing along its −z points along its figurine +z.
     """
-    from scipy.spatial.transform import Rotation
-
     m = np.asarray(m, dtype=float).reshape(3, 4)
-    q = Rotation.from_matrix(m[:, :3]).as_quat()
+    q = quat.from_matrix(m[:, :3])
     return to_ours(m[:, 3], q, "openvr")
 
 

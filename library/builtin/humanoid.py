@@ -48,7 +48,7 @@ import numpy as np
 from scipy.interpolate import CubicHermiteSpline, PchipInterpolator
 from scipy.spatial.transform import Rotation
 
-from retarget.bvh import euler_to_quat
+from doodle.core import quat
 from retarget.skeleton import Motion, Skeleton, end_site_positions, forward_kinematics
 
 __all__ = ["STANDARD", "REST_HIPS", "pose", "aim", "arm", "leg", "animate", "plant", "feet_points", "pace",
@@ -200,7 +200,7 @@ def _key_values(keys) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
             eul[i, STANDARD.index(name)] = a
         if off is not None:
             root[i] = off
-    quats = euler_to_quat("ZXY", eul[..., [2, 0, 1]].reshape(-1, 3)).reshape(len(keys), n, 4)
+    quats = quat.from_euler("ZXY", eul[..., [2, 0, 1]].reshape(-1, 3), degrees=True).reshape(len(keys), n, 4)
     return times, quats, root
 
 
