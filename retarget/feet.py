@@ -49,46 +49,65 @@ def two_bone_ik(motion: Motion, hip: int, knee: int, ankle: int, target: np.ndar
 def _leg_ik(rots: np.ndarray, motion: Motion, hip: int, knee: int, ankle: int, target: np.ndarray,
             weight: np.ndarray, world: tuple | None = None, front: np.ndarray | None = None) -> None:
     """:func:`two_bone_ik` written into ``rots`` (a copy of ``motion.rotations``; only the
-    leg's hip, knee and ankle are changed, so the legs of one body share one copy)."""
+    leg's hip, knee and ankle are changed, so the legs of one body share one copy). Worked
+    out :data:`~retarget.skeleton.FK_BLOCK` frames at a time (only the choice of bend plane
+    looks along the whole motion): a long motion's temporaries stay the size of a block."""
     positions, world = forward_kinematics(motion) if world is None else world
     a, b, c = positions[:, hip], positions[:, knee], positions[:, ankle]
-    t = c + (target - c) * weight[:, None]
-    lab = np.linalg.norm(b - a, axis=1)
-    lcb = np.linalg.norm(b - c, axis=1)
-    lat = np.clip(np.linalg.norm(t - a, axis=1), 1e-4, lab + lcb - 1e-4)
-    ac_ab_0 = _angle(c - a, b - a)
-    ba_bc_0 = _angle(a - b, c - b)
-    ac_at_0 = _angle(c - a, t - a)
-    ac_ab_1 = np.arccos(np.clip((lcb**2 - lab**2 - lat**2) / (-2 * lab * lat), -1, 1))
-    ba_bc_1 = np.arccos(np.clip((lat**2 - lab**2 - lcb**2) / (-2 * lab * lcb), -1, 1))
-    axis0 = np.cross(c - a, b - a)
     # a nearly straight leg has no reliable bend plane: it keeps the one of the nearest frame
     # where the knee is clearly bent (so the knee never flips sides between frames); a leg
     # straight throughout bends about the hip's own x axis
-    bent = np.linalg.norm(axis0, axis=1) > 0.15 * lab * lcb
-    if bent.any():
-        axis0 = axis0[nearest_true(bent)]  # a bent frame is its own nearest
+    bent = np.empty(len(a), dtype=bool)
+    for s in _blocks(len(a)):
+        lab, lcb = np.linalg.norm(b[s] - a[s], axis=1), np.linalg.norm(b[s] - c[s], axis=1)
+        bent[s] = np.linalg.norm(np.cross(c[s] - a[s], b[s] - a[s]), axis=1) > 0.15 * lab * lcb
+    nearest = nearest_true(bent) if bent.any() else None
+    parent = int(motion.skeleton.parents[hip])
+    for s in _blocks(len(a)):
+        _leg_ik_block(rots, world, s, a, b, c, hip, knee, ankle, parent, target[s], weight[s],
+                      None if nearest is None else nearest[s], None if front is None else front[s])
+
+
+def _blocks(frames: int):
+    """Slices of :data:`~retarget.skeleton.FK_BLOCK` frames covering ``frames``."""
+    return [slice(i, min(i + FK_BLOCK, frames)) for i in range(0, frames, FK_BLOCK)]
+
+
+def _leg_ik_block(rots, world, s: slice, a, b, c, hip, knee, ankle, parent, target, weight, nearest, front) -> None:
+    """:func:`_leg_ik` on the frames ``s`` (``nearest``: each one's frame whose bend plane it takes)."""
+    a_, b_, c_ = a[s], b[s], c[s]
+    t = c_ + (target - c_) * weight[:, None]
+    lab = np.linalg.norm(b_ - a_, axis=1)
+    lcb = np.linalg.norm(b_ - c_, axis=1)
+    lat = np.clip(np.linalg.norm(t - a_, axis=1), 1e-4, lab + lcb - 1e-4)
+    ac_ab_0 = _angle(c_ - a_, b_ - a_)
+    ba_bc_0 = _angle(a_ - b_, c_ - b_)
+    ac_at_0 = _angle(c_ - a_, t - a_)
+    ac_ab_1 = np.arccos(np.clip((lcb**2 - lab**2 - lat**2) / (-2 * lab * lat), -1, 1))
+    ba_bc_1 = np.arccos(np.clip((lat**2 - lab**2 - lcb**2) / (-2 * lab * lcb), -1, 1))
+    if nearest is not None:
+        axis0 = np.cross(c[nearest] - a[nearest], b[nearest] - a[nearest])
     else:
-        axis0 = quat.rotate(world[:, hip], np.tile([1.0, 0.0, 0.0], (len(axis0), 1)))
+        axis0 = quat.rotate(world[:, hip][s], np.tile([1.0, 0.0, 0.0], (len(a_), 1)))
     axis0 = _unit(axis0)
     if front is not None:  # the hinge that bends the knee towards the front
-        natural = np.cross(c - a, front)
+        natural = np.cross(c_ - a_, front)
         ok = np.linalg.norm(natural, axis=1) > 1e-6
         natural = _unit(natural)
         wrong = ok & (np.sum(axis0 * natural, axis=1) < 0.3)
         axis0[wrong] = natural[wrong]
-    axis1 = np.cross(c - a, t - a)
+    axis1 = np.cross(c_ - a_, t - a_)
     axis1 = np.where(np.linalg.norm(axis1, axis=1, keepdims=True) < 1e-12, axis0, _unit(axis1))
-    a_inv, b_inv = quat.conjugate(world[:, hip]), quat.conjugate(world[:, knee])
+    a_inv, b_inv = quat.conjugate(world[:, hip][s]), quat.conjugate(world[:, knee][s])
     r0 = quat.exp(quat.rotate(a_inv, axis0) * (ac_ab_1 - ac_ab_0)[:, None])
     r1 = quat.exp(quat.rotate(b_inv, axis0) * (ba_bc_1 - ba_bc_0)[:, None])
     r2 = quat.exp(quat.rotate(a_inv, axis1) * ac_at_0[:, None])
-    rots[:, hip] = quat.multiply(quat.multiply(rots[:, hip], r0), r2)
-    rots[:, knee] = quat.multiply(rots[:, knee], r1)
+    rots[s, hip] = quat.multiply(quat.multiply(rots[s, hip], r0), r2)
+    rots[s, knee] = quat.multiply(rots[s, knee], r1)
     # the foot keeps its orientation in the world (its sole stays on the ground)
-    new_hip_world = quat.multiply(world[:, int(motion.skeleton.parents[hip])], rots[:, hip])
-    new_knee_world = quat.multiply(new_hip_world, rots[:, knee])
-    rots[:, ankle] = quat.multiply(quat.conjugate(new_knee_world), world[:, ankle])
+    new_hip_world = quat.multiply(world[:, parent][s], rots[s, hip])
+    new_knee_world = quat.multiply(new_hip_world, rots[s, knee])
+    rots[s, ankle] = quat.multiply(quat.conjugate(new_knee_world), world[:, ankle][s])
 
 
 def nearest_true(mask: np.ndarray) -> np.ndarray:

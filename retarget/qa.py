@@ -163,17 +163,18 @@ def planted_moves(motion: Motion, world=None, limits: Limits = Limits()) -> tupl
     if motion.frames < 2 or not feet:
         n = max(motion.frames - 1, 0)
         return np.zeros((motion.frames, 0), dtype=bool), np.zeros((n, 0, 2))
-    points = [np.concatenate([positions[:, [a]], _foot_points(motion, positions, ends, a)], axis=1) for a in feet]
+    points = [_foot_points(motion, positions, ends, a) for a in feet]
     ground = float(np.percentile(np.min([p[:, 1:, 1].min(axis=1) for p in points], axis=0), 2))
     pairs = [_flat_moves(p[..., 1] - ground, p, motion.frame_time, limits) for p in points]
     return np.stack([f for f, _ in pairs], axis=1), np.stack([m for _, m in pairs], axis=1)
 
 
 def _foot_points(motion: Motion, positions: np.ndarray, ends: dict, ankle: int) -> np.ndarray:
-    """(F, k, 3): the ankle's descendants (toes) and their end sites — the sole's points."""
+    """(F, 1 + k, 3): the ankle, then the sole's points — its descendants (toes) and their end
+    sites (the ankle again when it has none)."""
     below = [j for j in motion.skeleton.subtree(ankle) if j != ankle]
-    points = [positions[:, j] for j in below] + [ends[j] for j in [ankle, *below] if j in ends]
-    return np.stack(points, axis=1) if points else positions[:, [ankle]]
+    points = [positions[:, j] for j in [ankle, *below]] + [ends[j] for j in [ankle, *below] if j in ends]
+    return np.stack(points if len(points) > 1 else points * 2, axis=1)
 
 
 def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
@@ -203,7 +204,8 @@ def check(motion: Motion, terrain=None, limits: Limits = Limits(), ground: float
         return np.concatenate([positions[a:b, body]] + [e[a:b, None] for e in ends.values()], axis=1)
 
     feet = [roles[k] for k in ("left_foot", "right_foot") if k in roles]
-    soles = [_foot_points(motion, positions, ends, a) for a in feet]
+    feet_points = [_foot_points(motion, positions, ends, a) for a in feet]  # the ankle, then its sole's points
+    soles = [p[:, 1:] for p in feet_points]
 
     def height(points):
         if terrain is not None:
@@ -216,12 +218,11 @@ def check(motion: Motion, terrain=None, limits: Limits = Limits(), ground: float
     standing = np.zeros(motion.frames, dtype=bool)  # a foot standing still above the ground
     lowest = np.full(motion.frames, np.inf)
     sole_heights = []
-    for ankle, sole in zip(feet, soles):
+    for points, sole in zip(feet_points, soles):
         sole_h = height(sole).min(axis=1) - standing_sole
         sole_heights.append(sole_h)
         # flat: every point of the foot — ankle, toes, tips — as low as when the character stands
         # on it (its 10th percentile over the motion), so whatever the skeleton puts where
-        points = np.concatenate([positions[:, [ankle]], sole], axis=1)
         flat, step = _flat_moves(height(points), points, dt, limits)
         sliding[1:] |= flat[1:] & flat[:-1] & (np.linalg.norm(step, axis=1) / dt > limits.slide)
         points = points[:, :, [0, 2]]

@@ -43,12 +43,24 @@ class Animation:
     roles: dict  # role -> joint index on the output skeleton
     terrain: object = None  # retarget.terrain ground (None: flat y = 0)
     frame_ranges: list = None  # per segment, its first and last output frame
-    projected: np.ndarray = None  # the doodle scaled and projected, before the transfer (n, 3)
+    samples: np.ndarray = None  # the doodle's positions (n, 3), as the segments index them
+    placement: tuple = None  # (origin, scale): how the doodle was put into the world
     styles: list = None  # per segment, the (L_t, L_w) applied
     efforts: list = None  # per segment, the recognised Effort (laban.classify.Quality) or None
     sample_times: np.ndarray = None  # s: the doodle's sample times the segments index (walks inserted: longer)
     contacts: tuple = ()  # the scene's interactions as compiled (retarget.qa.Contact), on every track
     sole: float = 0.0  # m: how high the skeleton's lowest foot joint stands above the floor (retarget.qa)
+
+    @property
+    def projected(self) -> np.ndarray | None:
+        """The doodle scaled and projected on the ground, before the transfer (n, 3): made
+        when asked (the previews), not kept beside the animation."""
+        if self.samples is None:
+            return None
+        origin, scale = self.placement
+        out = (self.samples - origin) * scale
+        out[:, 1] = 0.0 if self.terrain is None else self.terrain.height(out[:, [0, 2]])
+        return out
 
 
 @dataclass(frozen=True)
@@ -391,12 +403,10 @@ def finish(track, tokens, segments, staged: "Sequenced", times, rest, scale, ter
     motion = clamp_to_ground(motion, terrain, in_place=True)
     ranges = [(int(np.searchsorted(times, sp.t0)), int(min(np.searchsorted(times, sp.t1), len(times) - 1)))
               for sp in staged.spans]
-    projected = (track.p - origin) * scale
-    projected[:, 1] = 0.0 if terrain is None else terrain.height(projected[:, [0, 2]])
     return Animation(track=track.name, motion=motion, segments=segments, tokens=tokens, path=frame_path,
                      transitions=staged.transitions, clips=staged.clips, roles=rest.roles, terrain=terrain,
-                     frame_ranges=ranges, projected=projected, styles=staged.styles, efforts=staged.efforts,
-                     sample_times=track.t, sole=sole)
+                     frame_ranges=ranges, samples=track.p, placement=(origin, scale), styles=staged.styles,
+                     efforts=staged.efforts, sample_times=track.t, sole=sole)
 
 
 @dataclass(frozen=True, eq=False)
