@@ -158,11 +158,14 @@ def stride_scale(motion: Motion, pelvis: int, speed: float) -> float:
 
 
 FASTEST = 11.0  # m/s: a retimed clip's joints move no faster (real motion capture: ≤ 12.2 m/s)
+QUICKEST = 2.0  # … and no part of it plays more than this much faster than the clip's own pace: a slow
+# part is slow because of the body's weight too (standing up from a landing crouch), not only a hold
 
 
 def _limits(motion: Motion, clip_in: float, clip_out: float | None, limit: float, natural: tuple | None = None):
     """The played range's clip-time knots, their steps and the shortest each step may last
-    so that no joint or end site goes faster than ``limit`` (or than in the clip itself)."""
+    so that no joint or end site goes faster than ``limit`` (or than in the clip itself) and
+    no step plays more than :data:`QUICKEST` times faster than in the clip."""
     end = (motion.frames - 1) * motion.frame_time if clip_out is None else clip_out
     f0 = int(np.floor(clip_in / motion.frame_time + 1e-9))
     f1 = int(np.ceil(end / motion.frame_time - 1e-9))
@@ -171,7 +174,7 @@ def _limits(motion: Motion, clip_in: float, clip_out: float | None, limit: float
         return knots, np.diff(knots), np.zeros(max(len(knots) - 1, 0))
     step = np.diff(knots)
     speed = _frame_speeds(motion)[f0:f1]
-    least = step * np.minimum(speed / limit, 1.0)  # never slower than the clip's own pace
+    least = step * np.clip(speed / limit, 1.0 / QUICKEST, 1.0)  # never slower than the clip's own pace
     if natural is not None:  # a flight lasts as long as it does
         inside = (knots[1:] > natural[0] + 1e-9) & (knots[:-1] < natural[1] - 1e-9)
         least[inside] = step[inside]

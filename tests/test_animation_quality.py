@@ -91,7 +91,7 @@ def _peak(motion, u, knots, duration, fps=30.0):
 
 
 def test_pacing_keeps_joints_under_the_limit_and_the_flight_at_its_own_pace():
-    from retarget.sequence import paced, shortest
+    from retarget.sequence import QUICKEST, paced, shortest
 
     jump = _clip("Jump")
     m = jump.motion
@@ -99,12 +99,17 @@ def test_pacing_keeps_joints_under_the_limit_and_the_flight_at_its_own_pace():
     uniform = _peak(m, np.array([0.0, 1.0]), np.array([0.0, end]), 1.0)
     assert uniform > 15.0  # squeezed evenly into a second, the jump whips
     flight = (0.85, 1.3)
-    assert shortest(m, natural=flight) < 1.0
-    u, knots = paced(m, 0.0, None, 1.0, 11.0, flight)
+    least = shortest(m, natural=flight)
+    assert least < 0.7 * end  # the wind-up and the landing's recovery squeezed …
+    assert least >= flight[1] - flight[0] + (end - (flight[1] - flight[0])) / QUICKEST - 1e-9  # … at most so much
+    duration = 1.05 * least
+    u, knots = paced(m, 0.0, None, duration, 11.0, flight)
     assert u[0] == 0.0 and u[-1] == pytest.approx(1.0) and np.all(np.diff(u) >= 0)
-    assert _peak(m, u, knots, 1.0) < 12.0
+    assert _peak(m, u, knots, duration) < 12.0
     inside = (knots[1:] > flight[0]) & (knots[:-1] < flight[1])
-    assert np.allclose(np.diff(u)[inside] * 1.0, np.diff(knots)[inside])  # the flight in real time
+    assert np.allclose(np.diff(u)[inside] * duration, np.diff(knots)[inside])  # the flight in real time
+    rate = np.diff(knots) / (np.diff(u) * duration)  # clip seconds per second played
+    assert rate.max() <= QUICKEST + 1e-6  # standing up from the landing is never a pop
     slow = paced(m, 0.0, None, 2 * end)  # never slowed below its own pace for speed
     assert np.allclose(slow[0], [0.0, 1.0])
 

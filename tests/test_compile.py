@@ -241,3 +241,18 @@ def test_recognised_qualities_are_applied_on_a_grid_so_a_long_doodle_shares_its_
         assert abs(on / STYLE_STEP - round(on / STYLE_STEP)) < 1e-9
         assert repr(on) == repr(round(on, 2))  # written to the report as the value applied
     assert repr(_on_grid(-0.01)) == "0.0"  # never -0.0: the same stylised clip as 0.0
+
+
+def test_the_demo_jump_lands_and_stands_up_at_a_persons_pace(compiled):
+    """After the landing the body rises from its crouch over several frames, not two: the
+    pelvis never rises faster than twice the built-in clip's own recovery (0.83 m/s)."""
+    out, report = compiled
+    track = report["tracks"]["c0"]
+    jump = next(s for s in track["segments"] if s["action"] == "Jump")
+    positions = forward_kinematics(read_bvh(out / "c0.bvh", unit=1.0))[0]
+    y = positions[:, 0, 1]
+    around = int(round(jump["end"] * 30)) - 15
+    lowest = around + int(np.argmin(y[around: around + 30]))  # the landing crouch
+    rise = np.diff(y[lowest: lowest + 20]) * 30
+    assert y[lowest + 20] - y[lowest] > 0.2  # it does stand up …
+    assert rise.max() < 2 * 0.83  # … at a person's pace (it rose 4–5 m/s in two frames before)
