@@ -162,10 +162,11 @@ QUICKEST = 2.0  # … and no part of it plays more than this much faster than th
 # part is slow because of the body's weight too (standing up from a landing crouch), not only a hold
 
 
-def _limits(motion: Motion, clip_in: float, clip_out: float | None, limit: float, natural: tuple | None = None):
+def _limits(motion: Motion, clip_in: float, clip_out: float | None, limit: float, natural: tuple | None = None,
+            quickest: float = QUICKEST):
     """The played range's clip-time knots, their steps and the shortest each step may last
     so that no joint or end site goes faster than ``limit`` (or than in the clip itself) and
-    no step plays more than :data:`QUICKEST` times faster than in the clip."""
+    no step plays more than ``quickest`` times faster than in the clip."""
     end = (motion.frames - 1) * motion.frame_time if clip_out is None else clip_out
     f0 = int(np.floor(clip_in / motion.frame_time + 1e-9))
     f1 = int(np.ceil(end / motion.frame_time - 1e-9))
@@ -174,7 +175,7 @@ def _limits(motion: Motion, clip_in: float, clip_out: float | None, limit: float
         return knots, np.diff(knots), np.zeros(max(len(knots) - 1, 0))
     step = np.diff(knots)
     speed = _frame_speeds(motion)[f0:f1]
-    least = step * np.clip(speed / limit, 1.0 / QUICKEST, 1.0)  # never slower than the clip's own pace
+    least = step * np.clip(speed / limit, 1.0 / quickest, 1.0)  # never slower than the clip's own pace
     if natural is not None:  # a flight lasts as long as it does
         inside = (knots[1:] > natural[0] + 1e-9) & (knots[:-1] < natural[1] - 1e-9)
         least[inside] = step[inside]
@@ -206,9 +207,13 @@ def paced(motion: Motion, clip_in: float, clip_out: float | None, duration: floa
     parts of the clip (holds, wind-ups) are squeezed more and the fast ones less. Returns
     knots (fraction of the span, clip time) for :func:`clip_time`; uniform when it can be
     (or when even that cannot keep to the limit: give the clip room, :func:`shortest`).
-    ``natural``: clip times (a jump's flight) played at their own pace where they can be."""
+    ``natural``: clip times (a jump's flight) played at their own pace where they can be. No
+    part plays more than :data:`QUICKEST` times its own pace unless the clip cannot otherwise
+    fit its span (no room was left around it): then only the joints' ``limit`` holds."""
     end = (motion.frames - 1) * motion.frame_time if clip_out is None else clip_out
     knots, step, least = _limits(motion, clip_in, clip_out, limit, natural)
+    if least.sum() >= duration:
+        knots, step, least = _limits(motion, clip_in, clip_out, limit, natural, quickest=np.inf)
     if len(knots) < 3 or duration <= 0:
         return np.array([0.0, 1.0]), np.array([clip_in, end])
     speed_max = float((least / np.maximum(step, 1e-12)).max()) * limit
