@@ -8,8 +8,9 @@ transition matrix banded (stay or move one state right) and kept banded by EM; s
 and variances start from a uniform split of each sequence in time (k-means would ignore time
 order). Features are standardised by the training frames' mean and deviation.
 
-Scoring is a scaled forward pass written with numpy over all models at once, so a model is
-plain arrays (persisted by :mod:`laban.models`) and needs no hmmlearn object to run.
+Scoring is a scaled forward pass written with numpy over many sequences and all models at
+once (the same results as hmmlearn's compiled passes, which the tests compare with), so a
+model is plain arrays (persisted by :mod:`laban.models`) and scoring needs no hmmlearn.
 """
 
 from __future__ import annotations
@@ -36,32 +37,81 @@ class HMMSet:
 
     def log_likelihoods(self, seq: np.ndarray) -> np.ndarray:
         """(m,) log P(sequence | model) for a (T, d) feature sequence, all models at once."""
-        x = (np.asarray(seq, dtype=float) - self.centre) / self.scale
-        m, S, d = self.means.shape
+        return self.log_likelihoods_many(np.asarray(seq, dtype=float)[None])[0]
+
+    def log_likelihoods_many(self, seqs: np.ndarray, chunk: int = 64) -> np.ndarray:
+        """(n, m) log P(sequence | model) for equal-length sequences ``seqs`` (n, T, d), every
+        sequence and model at once (in chunks of ``chunk`` sequences, to bound the memory)."""
+        seqs = np.asarray(seqs, dtype=float)
+        out = np.empty((len(seqs), len(self.labels)))
+        for k in range(0, len(seqs), chunk):
+            out[k:k + chunk] = self._scores(seqs[k:k + chunk])
+        return out
+
+    def _scores(self, seqs: np.ndarray) -> np.ndarray:
+        n, T, d = seqs.shape
+        m, S, _ = self.means.shape
+        x = ((seqs - self.centre) / self.scale).transpose(1, 0, 2).reshape(T * n, d)  # time-major rows
         inv = (1.0 / self.variances).reshape(m * S, d)
         mu = self.means.reshape(m * S, d)
         const = np.sum(np.log(2 * np.pi * self.variances), axis=2).ravel() + np.sum(mu * mu * inv, axis=1)
         quad = (x * x) @ inv.T - 2.0 * x @ (mu * inv).T  # Σ (x − μ)²/σ² expanded: two matrix products
-        log_b = (-0.5 * (quad + const)).reshape(len(x), m, S)
-        top = log_b.max(axis=2, keepdims=True)  # (T, m, 1): emissions scaled per frame, logs added back
+        log_b = (-0.5 * (quad + const)).reshape(T, n, m, S)
+        top = log_b.max(axis=3, keepdims=True)  # emissions scaled per frame and model, logs added back
         b = np.exp(log_b - top)
-        total = top[:, :, 0].sum(axis=0)
-        return np.array([_forward(self.start[k], self.transitions[k], np.ascontiguousarray(b[:, k]),
-                                  np.ascontiguousarray(log_b[:, k]), total[k]) for k in range(len(self.labels))])
+        ll, under = _forward(self.start, self.transitions, b)
+        ll += top[..., 0].sum(axis=0)
+        if under.any():  # a frame's scaled probabilities underflowed: those pairs again in log space
+            i, k = np.nonzero(under)
+            ll[i, k] = _forward_log(self.start[k], self.transitions[k], log_b[:, i, k])
+        return ll
 
 
-def _forward(start: np.ndarray, A: np.ndarray, b: np.ndarray, log_b: np.ndarray, offset: float) -> float:
-    """log P(observations): the scaled forward algorithm on emission probabilities ``b``
-    (T, S) scaled per frame (their logs' frame maxima summing to ``offset``), or — when a
-    frame's scaled probabilities underflow to zero — the same pass in log space. Uses
-    hmmlearn's compiled passes (private in hmmlearn 0.3.3)."""
-    from hmmlearn._hmmc import forward_log, forward_scaling
+MIN_SUM = 1e-300  # a forward step whose probabilities sum below this has underflowed (as hmmlearn's)
 
-    try:
-        return offset + float(forward_scaling(start, A, b)[0])
-    except ValueError:  # underflow
-        with np.errstate(divide="ignore"):
-            return float(forward_log(start, A, log_b)[0])
+
+def _forward(start: np.ndarray, A: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The scaled forward algorithm of models ``start`` (m, S), ``A`` (m, S, S) on emission
+    probabilities ``b`` (T, n, m, S) of n sequences: ``(log P, underflowed)``, both (n, m),
+    without the emissions' scale. A step is one matrix product for every sequence and model
+    (the transitions as one block-diagonal matrix); ``underflowed`` marks the pairs where a
+    step's probabilities summed below :data:`MIN_SUM` (their ``log P`` is then meaningless).
+    Equals hmmlearn's ``forward_scaling`` (up to rounding), which raises there instead."""
+    T, n, m, S = b.shape
+    block = np.zeros((m * S, m * S))
+    for k in range(m):
+        block[k * S:(k + 1) * S, k * S:(k + 1) * S] = A[k]
+    b = b.reshape(T, n, m * S)
+    sums = np.empty((T, n, m))
+    a = start.ravel() * b[0]
+    for t in range(T):
+        if t:
+            a = (a @ block) * b[t]
+        a = a.reshape(n, m, S)
+        s = np.sum(a, axis=2, out=sums[t])
+        a = (a / np.maximum(s, MIN_SUM)[..., None]).reshape(n, m * S)  # 0, never NaN, once underflowed
+    under = (sums < MIN_SUM).any(axis=0)
+    with np.errstate(divide="ignore"):
+        return np.log(sums).sum(axis=0), under
+
+
+def _forward_log(start: np.ndarray, A: np.ndarray, log_b: np.ndarray) -> np.ndarray:
+    """The forward algorithm in log space for p pairs: models ``start`` (p, S), ``A`` (p, S, S)
+    on log emission densities ``log_b`` (T, p, S); (p,) log P. Equals hmmlearn's ``forward_log``."""
+    with np.errstate(divide="ignore"):
+        log_start, log_A = np.log(start), np.log(A)
+    a = log_start + log_b[0]
+    for t in range(1, len(log_b)):
+        a = _logsumexp(a[:, :, None] + log_A, axis=1) + log_b[t]
+    return _logsumexp(a, axis=1)
+
+
+def _logsumexp(x: np.ndarray, axis: int) -> np.ndarray:
+    """log Σ exp along ``axis``; −inf where every term is −inf."""
+    top = x.max(axis=axis, keepdims=True)
+    top = np.where(np.isfinite(top), top, 0.0)
+    with np.errstate(divide="ignore"):
+        return np.log(np.sum(np.exp(x - top), axis=axis)) + np.squeeze(top, axis)
 
 
 def left_to_right(points: int, states: int = STATES) -> tuple[np.ndarray, np.ndarray]:
