@@ -50,49 +50,92 @@ class HMMSet:
 
     def _scores(self, seqs: np.ndarray) -> np.ndarray:
         n, T, d = seqs.shape
-        m, S, _ = self.means.shape
-        x = ((seqs - self.centre) / self.scale).transpose(1, 0, 2).reshape(T * n, d)  # time-major rows
-        inv = (1.0 / self.variances).reshape(m * S, d)
-        mu = self.means.reshape(m * S, d)
-        const = np.sum(np.log(2 * np.pi * self.variances), axis=2).ravel() + np.sum(mu * mu * inv, axis=1)
-        quad = (x * x) @ inv.T - 2.0 * x @ (mu * inv).T  # Σ (x − μ)²/σ² expanded: two matrix products
-        log_b = (-0.5 * (quad + const)).reshape(T, n, m, S)
-        top = log_b.max(axis=3, keepdims=True)  # emissions scaled per frame and model, logs added back
-        b = np.exp(log_b - top)
-        ll, under = _forward(self.start, self.transitions, b)
-        ll += top[..., 0].sum(axis=0)
+        z = ((seqs - self.centre) / self.scale).transpose(1, 0, 2)  # time-major
+        density = _Densities(self.means, self.variances)
+        scale = np.zeros((n, len(self.labels)))  # the emissions' scales: their logs summed over frames
+
+        def scaled():  # emissions BLOCK frames at a time (cache-sized), scaled per frame and model
+            for t in range(0, T, BLOCK):
+                log_b = density(z[t:t + BLOCK])
+                top = _last_max(log_b)
+                scale[...] += top.sum(axis=0)
+                log_b -= top[..., None]
+                yield np.exp(log_b, out=log_b)
+
+        ll, under = _forward(self.start, self.transitions, scaled())
+        ll += scale
         if under.any():  # a frame's scaled probabilities underflowed: those pairs again in log space
             i, k = np.nonzero(under)
-            ll[i, k] = _forward_log(self.start[k], self.transitions[k], log_b[:, i, k])
+            log_b = density(z[:, i])[:, np.arange(len(i)), k]
+            ll[i, k] = _forward_log(self.start[k], self.transitions[k], log_b)
         return ll
 
 
+BLOCK = 32  # frames of emissions made at once
 MIN_SUM = 1e-300  # a forward step whose probabilities sum below this has underflowed (as hmmlearn's)
 
 
-def _forward(start: np.ndarray, A: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The scaled forward algorithm of models ``start`` (m, S), ``A`` (m, S, S) on emission
-    probabilities ``b`` (T, n, m, S) of n sequences: ``(log P, underflowed)``, both (n, m),
-    without the emissions' scale. A step is one matrix product for every sequence and model
-    (the transitions as one block-diagonal matrix); ``underflowed`` marks the pairs where a
-    step's probabilities summed below :data:`MIN_SUM` (their ``log P`` is then meaningless).
-    Equals hmmlearn's ``forward_scaling`` (up to rounding), which raises there instead."""
-    T, n, m, S = b.shape
+class _Densities:
+    """Log densities (T, n, m, S) of diagonal Gaussian states ``means``, ``variances`` (m, S, d)
+    for standardised frames (T, n, d): ``Σ (x − μ)²/σ²`` expanded, so one matrix product of
+    ``(x², x)`` does every state."""
+
+    def __init__(self, means: np.ndarray, variances: np.ndarray):
+        m, S, d = means.shape
+        inv = (1.0 / variances).reshape(m * S, d)
+        mu = means.reshape(m * S, d)
+        self.shape = (m, S)
+        self.weights = np.vstack([-0.5 * inv.T, (mu * inv).T])  # (2d, m S)
+        self.offset = 0.5 * (np.sum(np.log(2 * np.pi * variances), axis=2).ravel() + np.sum(mu * mu * inv, axis=1))
+
+    def __call__(self, z: np.ndarray) -> np.ndarray:
+        T, n, d = z.shape
+        x = np.concatenate([z * z, z], axis=2).reshape(T * n, 2 * d)
+        log_b = x @ self.weights
+        log_b -= self.offset
+        return log_b.reshape(T, n, *self.shape)
+
+
+def _last_max(x: np.ndarray) -> np.ndarray:
+    """``x.max(axis=-1)`` for a short last axis (numpy's reduction is several times slower there)."""
+    top = x[..., 0].copy()
+    for s in range(1, x.shape[-1]):
+        np.maximum(top, x[..., s], out=top)
+    return top
+
+
+def _forward(start: np.ndarray, A: np.ndarray, blocks) -> tuple[np.ndarray, np.ndarray]:
+    """The scaled forward algorithm of models ``start`` (m, S), ``A`` (m, S, S) on the emission
+    probabilities of n sequences, given in ``blocks`` of frames (each (k, n, m, S)):
+    ``(log P, underflowed)``, both (n, m), without the emissions' scale. A step is two matrix
+    products for every sequence and model (the transitions as one block-diagonal matrix, then
+    a block of ones giving every state its model's total); ``underflowed`` marks the pairs
+    where a step's probabilities summed below :data:`MIN_SUM` (their ``log P`` is then
+    meaningless). Equals hmmlearn's ``forward_scaling`` (up to rounding), which raises there
+    instead."""
+    m, S = start.shape
     block = np.zeros((m * S, m * S))
     for k in range(m):
         block[k * S:(k + 1) * S, k * S:(k + 1) * S] = A[k]
-    b = b.reshape(T, n, m * S)
-    sums = np.empty((T, n, m))
-    a = start.ravel() * b[0]
-    for t in range(T):
-        if t:
-            a = (a @ block) * b[t]
-        a = a.reshape(n, m, S)
-        s = np.sum(a, axis=2, out=sums[t])
-        a = (a / np.maximum(s, MIN_SUM)[..., None]).reshape(n, m * S)  # 0, never NaN, once underflowed
-    under = (sums < MIN_SUM).any(axis=0)
-    with np.errstate(divide="ignore"):
-        return np.log(sums).sum(axis=0), under
+    ones = np.kron(np.eye(m), np.ones((S, S)))
+    a, log_p, under = None, 0.0, np.False_
+    for b in blocks:
+        k, n = b.shape[:2]
+        b = b.reshape(k, n, m * S)
+        sums = np.empty((k, n, m))
+        for t in range(k):
+            if a is None:
+                a = start.ravel() * b[t]
+            else:
+                a = a @ block
+                a *= b[t]
+            total = a @ ones
+            sums[t] = total[:, ::S]
+            a /= np.maximum(total, MIN_SUM, out=total)  # 0, never NaN, once underflowed
+        under = under | (sums < MIN_SUM).any(axis=0)
+        with np.errstate(divide="ignore"):
+            log_p = log_p + np.log(sums).sum(axis=0)
+    return log_p, under
 
 
 def _forward_log(start: np.ndarray, A: np.ndarray, log_b: np.ndarray) -> np.ndarray:
@@ -108,8 +151,7 @@ def _forward_log(start: np.ndarray, A: np.ndarray, log_b: np.ndarray) -> np.ndar
 
 def _logsumexp(x: np.ndarray, axis: int) -> np.ndarray:
     """log Σ exp along ``axis``; −inf where every term is −inf."""
-    top = x.max(axis=axis, keepdims=True)
-    top = np.where(np.isfinite(top), top, 0.0)
+    top = np.maximum(x.max(axis=axis, keepdims=True), -np.finfo(float).max)  # finite: −inf − top is −inf
     with np.errstate(divide="ignore"):
         return np.log(np.sum(np.exp(x - top), axis=axis)) + np.squeeze(top, axis)
 
