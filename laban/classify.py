@@ -109,7 +109,15 @@ def bayes_drive(model: EffortModel, X: np.ndarray) -> list[str]:
 
 def element_drive(model: EffortModel, seq: np.ndarray) -> str:
     """The Element HMM method: each Factor by its two Element models, combined as a Drive."""
-    ll = dict(zip(model.elements.labels, model.elements.log_likelihoods(seq)))
-    signs = [1 if ll[element(f, 1)] >= ll[element(f, -1)] else -1 for f in ("space", "time", "weight")]
-    return drive_of(*signs)
+    return element_drives(model, np.asarray(seq)[None])[0]
+
+
+def element_drives(model: EffortModel, seqs: np.ndarray) -> list[str]:
+    """:func:`element_drive` of each sequence of ``seqs`` (n, T, d), scored together."""
+    out = []
+    for row in model.elements.log_likelihoods_many(seqs):
+        ll = dict(zip(model.elements.labels, row))
+        out.append(drive_of(*[1 if ll[element(f, 1)] >= ll[element(f, -1)] else -1
+                              for f in ("space", "time", "weight")]))
+    return out
 
