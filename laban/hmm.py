@@ -140,12 +140,21 @@ def _forward(start: np.ndarray, A: np.ndarray, blocks) -> tuple[np.ndarray, np.n
 
 def _forward_log(start: np.ndarray, A: np.ndarray, log_b: np.ndarray) -> np.ndarray:
     """The forward algorithm in log space for p pairs: models ``start`` (p, S), ``A`` (p, S, S)
-    on log emission densities ``log_b`` (T, p, S); (p,) log P. Equals hmmlearn's ``forward_log``."""
+    on log emission densities ``log_b`` (T, p, S); (p,) log P. Equals hmmlearn's ``forward_log``
+    (up to rounding). Left-to-right banded models (all of them, once trained) take the two
+    terms of each state at once (``logaddexp``)."""
     with np.errstate(divide="ignore"):
         log_start, log_A = np.log(start), np.log(A)
-    a = log_start + log_b[0]
-    for t in range(1, len(log_b)):
-        a = _logsumexp(a[:, :, None] + log_A, axis=1) + log_b[t]
+        a = log_start + log_b[0]
+        if np.tril(A, -1).any() or np.triu(A, 2).any():
+            for t in range(1, len(log_b)):
+                a = _logsumexp(a[:, :, None] + log_A, axis=1) + log_b[t]
+        else:
+            stay, move = np.diagonal(log_A, axis1=1, axis2=2), np.diagonal(log_A, 1, axis1=1, axis2=2)
+            for t in range(1, len(log_b)):
+                to = a + stay
+                np.logaddexp(to[:, 1:], a[:, :-1] + move, out=to[:, 1:])
+                a = to + log_b[t]
     return _logsumexp(a, axis=1)
 
 

@@ -65,6 +65,7 @@ def test_underflow_falls_back_to_log_space():
     variances = np.full_like(hs.variances, 0.05)
     A = np.array([np.eye(STATES) * 0.9 + np.eye(STATES, k=1) * 0.1 for _ in range(3)])
     A[:, -1, -1] = 1.0
+    A[2] = rng.dirichlet(np.ones(STATES), STATES)  # not banded: the general log-space step
     hs = HMMSet(hs.labels, starts, A, means, variances, np.zeros(4), np.ones(4))
     seqs = rng.normal(size=(4, 50, 4)) * 0.1
     seqs[1, 0] = 40.0  # first frame far from state 0: its scaled probability underflows to 0
