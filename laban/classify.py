@@ -51,32 +51,54 @@ NEUTRAL = Quality(0.0, 0.0, 0.5, 0.5, "", "")
 
 def drive_posterior(model: EffortModel, t: np.ndarray, p: np.ndarray, q: np.ndarray) -> np.ndarray:
     """(8,) posterior over ``model.drives.labels``."""
-    ll = model.drives.log_likelihoods(sequence(t, p, q, model.sets, model.points)) / model.temperature
-    w = np.exp(ll - ll.max())
-    return w / w.sum()
+    return drive_posteriors(model, [(t, p, q)])[0]
+
+
+def drive_posteriors(model: EffortModel, pieces: list) -> np.ndarray:
+    """(n, 8) posteriors over ``model.drives.labels`` of segments ``(t, p, q)``, scored together."""
+    seqs = np.stack([sequence(t, p, q, model.sets, model.points) for t, p, q in pieces])
+    ll = model.drives.log_likelihoods_many(seqs) / model.temperature
+    w = np.exp(ll - ll.max(axis=1, keepdims=True))
+    return w / w.sum(axis=1, keepdims=True)
 
 
 def quality(model: EffortModel, t: np.ndarray, p: np.ndarray, q: np.ndarray) -> Quality:
     """Time and Weight of the segment ``(t, p, q)``."""
+    return qualities(model, [(t, p, q)])[0]
+
+
+def _still(t: np.ndarray, p: np.ndarray, q: np.ndarray) -> bool:
+    """Too short to tell, or a hand that stayed put: left neutral."""
     if len(t) < MIN_SAMPLES or float(t[-1] - t[0]) <= 0:
-        return NEUTRAL
+        return True
     reach = float(np.linalg.norm(np.ptp(p, axis=0)))
     turn = float(2 * np.arccos(np.clip(np.abs(q @ q[0]), 0.0, 1.0)).max())
-    if reach < STILL_REACH and turn < STILL_TURN:
-        return NEUTRAL
-    x = effort_features(t, p)[None]
-    sudden = float(model.factors["time"].probability(x)[0])
-    strong = float(model.factors["weight"].probability(x)[0])
+    return reach < STILL_REACH and turn < STILL_TURN
+
+
+def qualities(model: EffortModel, pieces: list) -> list[Quality]:
+    """:func:`quality` of each segment ``(t, p, q)`` of ``pieces``; the Drive HMM scores the
+    moving ones together (one forward pass for all)."""
+    out = [NEUTRAL] * len(pieces)
+    moving = [i for i, piece in enumerate(pieces) if not _still(*piece)]
+    if not moving:
+        return out
 
     def applied(prob):
         return round(2 * prob - 1, 3) if max(prob, 1 - prob) >= model.threshold else 0.0
 
-    ts, ws = (1 if sudden >= 0.5 else -1), (1 if strong >= 0.5 else -1)
-    post = drive_posterior(model, t, p, q)
     labels = model.drives.labels
-    same = [k for k, d in enumerate(labels) if DRIVES[d][1:] == (ts, ws)]
-    best = labels[max(same, key=lambda k: post[k])]
-    return Quality(applied(sudden), applied(strong), sudden, strong, best, state_of(ts, ws))
+    posts = drive_posteriors(model, [pieces[i] for i in moving])
+    for i, post in zip(moving, posts):
+        t, p, _ = pieces[i]
+        x = effort_features(t, p)[None]
+        sudden = float(model.factors["time"].probability(x)[0])
+        strong = float(model.factors["weight"].probability(x)[0])
+        ts, ws = (1 if sudden >= 0.5 else -1), (1 if strong >= 0.5 else -1)
+        same = [k for k, d in enumerate(labels) if DRIVES[d][1:] == (ts, ws)]
+        best = labels[max(same, key=lambda k: post[k])]
+        out[i] = Quality(applied(sudden), applied(strong), sudden, strong, best, state_of(ts, ws))
+    return out
 
 
 def bayes_drive(model: EffortModel, X: np.ndarray) -> list[str]:
@@ -87,7 +109,15 @@ def bayes_drive(model: EffortModel, X: np.ndarray) -> list[str]:
 
 def element_drive(model: EffortModel, seq: np.ndarray) -> str:
     """The Element HMM method: each Factor by its two Element models, combined as a Drive."""
-    ll = dict(zip(model.elements.labels, model.elements.log_likelihoods(seq)))
-    signs = [1 if ll[element(f, 1)] >= ll[element(f, -1)] else -1 for f in ("space", "time", "weight")]
-    return drive_of(*signs)
+    return element_drives(model, np.asarray(seq)[None])[0]
+
+
+def element_drives(model: EffortModel, seqs: np.ndarray) -> list[str]:
+    """:func:`element_drive` of each sequence of ``seqs`` (n, T, d), scored together."""
+    out = []
+    for row in model.elements.log_likelihoods_many(seqs):
+        ll = dict(zip(model.elements.labels, row))
+        out.append(drive_of(*[1 if ll[element(f, 1)] >= ll[element(f, -1)] else -1
+                              for f in ("space", "time", "weight")]))
+    return out
 

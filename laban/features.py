@@ -127,6 +127,44 @@ def _norm(x: np.ndarray) -> np.ndarray:
     return np.sqrt(np.einsum("ij,ij->i", x, x))
 
 
+def _gradient(x: np.ndarray, dt: float) -> np.ndarray:
+    """``np.gradient(x, dt, axis=0)`` (central differences, one-sided at the ends) to the bit,
+    without its checks; ``x`` has at least two rows."""
+    out = np.empty_like(x, dtype=float)
+    out[1:-1] = (x[2:] - x[:-2]) / (2.0 * dt)
+    out[0] = (x[1] - x[0]) / dt
+    out[-1] = (x[-1] - x[-2]) / dt
+    return out
+
+
+def _median(x: np.ndarray) -> float:
+    """``np.median`` of a non-empty 1-D array, to the bit (:func:`_quantiles`)."""
+    return _quantiles(x, ())[1]
+
+
+def _quantiles(x: np.ndarray, qs: tuple[float, ...]) -> tuple[tuple[float, ...], float]:
+    """``(np.quantile(x, q) for q in qs)`` (linear interpolation) and ``np.median(x)`` of a
+    non-empty 1-D array, to the bit, from one partition (numpy's functions spend more on their
+    checks than on a segment's few hundred samples)."""
+    n = len(x)
+    virtual = [(n - 1) * q for q in qs]
+    below = [min(math.floor(v), n - 1) for v in virtual]
+    kth = {n // 2, n - 1, *below, *(min(b + 1, n - 1) for b in below)} | ({n // 2 - 1} if n % 2 == 0 else set())
+    part = np.partition(x, sorted(kth))
+    if math.isnan(part[-1]):  # numpy's answer with a NaN
+        return tuple(math.nan for _ in qs), math.nan
+    median = float(part[n // 2]) if n % 2 else float((part[n // 2 - 1] + part[n // 2]) / 2.0)
+    out = []
+    for v, b in zip(virtual, below):
+        if v >= n - 1:
+            out.append(float(part[-1]))
+            continue
+        lo, hi, gamma = part[b], part[b + 1], v - b
+        diff = hi - lo
+        out.append(float(hi - diff * (1 - gamma)) if gamma >= 0.5 else float(lo + diff * gamma))
+    return tuple(out), median
+
+
 def _resample(t: np.ndarray, grid: np.ndarray, x: np.ndarray) -> np.ndarray:
     """Linear interpolation of the rows of ``x`` (n, c), sampled at ``t``, at ``grid`` ⊂ [t0, t_end]."""
     i = np.clip(np.searchsorted(t, grid, side="right") - 1, 0, len(t) - 2)
@@ -153,7 +191,7 @@ def kinematics(t: np.ndarray, p: np.ndarray, q: np.ndarray, rate: float | None =
     if not np.all(steps > 0):
         raise ValueError("timestamps must be strictly increasing")
     duration = t[-1] - t[0]
-    rate = float(rate) if rate else 1.0 / float(np.median(steps))
+    rate = float(rate) if rate else 1.0 / _median(steps)
     m = max(MIN_SAMPLES, int(round(duration * rate)) + 1)
     grid = np.linspace(t[0], t[-1], m)
     dt = duration / (m - 1)
@@ -466,9 +504,9 @@ def _effort_signal(t: np.ndarray, p: np.ndarray) -> tuple:
     # central differences of the smoothed signal (scipy's derivative-of-Gaussian kernels are
     # truncated and leak a constant offset into the acceleration); at 120 Hz they are within
     # 1 % of the exact derivatives of anything the low-pass lets through
-    v = np.gradient(x, dt, axis=0)
-    a = np.gradient(v, dt, axis=0)
-    j = np.gradient(a, dt, axis=0)
+    v = _gradient(x, dt)
+    a = _gradient(v, dt)
+    j = _gradient(a, dt)
     return grid, v, a, j, dt, points
 
 
@@ -509,7 +547,7 @@ def _stroke_table(speed: np.ndarray, acc: np.ndarray, jerk: np.ndarray, dt: floa
     n = len(speed)
     smooth = gaussian_filter1d(speed, STROKE_SMOOTH / dt, mode="nearest") if n > 1 else speed
     peaks = _stroke_peaks(smooth)
-    tangential = np.gradient(speed, dt) if n > 1 else np.zeros(n)
+    tangential = _gradient(speed, dt) if n > 1 else np.zeros(n)
     rows = []
     eps = 1e-12
     for i, k in enumerate(peaks):
@@ -563,7 +601,7 @@ def effort_features(t: np.ndarray, p: np.ndarray) -> np.ndarray:
     pts = points[lo:hi]  # the spline (or the line) through p on the active part of the grid: made once
     extent = max(2.0 * float(np.max(_norm(pts - pts.mean(axis=0)))), TINY)
     active = (hi - lo) * dt
-    tangential = np.gradient(sp, dt) if len(sp) > 1 else np.zeros(1)
+    tangential = _gradient(sp, dt) if len(sp) > 1 else np.zeros(1)
     mean_tan = max(float(np.abs(tangential).mean()), TINY)
     rms_v, rms_a = float(np.sqrt(np.mean(sp**2))), float(np.sqrt(np.mean(ac**2)))
     rms_j = float(np.sqrt(np.mean(je**2)))
@@ -575,6 +613,7 @@ def effort_features(t: np.ndarray, p: np.ndarray) -> np.ndarray:
     rest = sp <= 0.2 * top
     rise = k - (k - int(np.argmax(rest[k::-1])) if rest[: k + 1].any() else 0)
     fall = (int(np.argmax(rest[k:])) if rest[k:].any() else len(sp) - 1 - k)
+    (p95,), median_acc = _quantiles(ac, (0.95,))
     energy = np.sort(sp**2)[::-1]
     busiest = max(1, int(round(0.2 * len(energy))))
     eps = 1e-12
@@ -595,7 +634,7 @@ def effort_features(t: np.ndarray, p: np.ndarray) -> np.ndarray:
         math.log((max(float(-tangential.min()), eps) + eps) / (max(float(tangential.max()), eps) + eps)),
         float(sp.std() / sp.mean()),
         float(energy[:busiest].sum() / energy.sum()),
-        math.log((float(np.percentile(ac, 95)) + eps) / (float(np.median(ac)) + eps)),
+        math.log((p95 + eps) / (median_acc + eps)),
         math.log(rms_a * active / rms_v + eps),
         math.log1p(_strokes(sp) / active),
     ]

@@ -8,8 +8,9 @@ transition matrix banded (stay or move one state right) and kept banded by EM; s
 and variances start from a uniform split of each sequence in time (k-means would ignore time
 order). Features are standardised by the training frames' mean and deviation.
 
-Scoring is a scaled forward pass written with numpy over all models at once, so a model is
-plain arrays (persisted by :mod:`laban.models`) and needs no hmmlearn object to run.
+Scoring is a scaled forward pass written with numpy over many sequences and all models at
+once (the same results as hmmlearn's compiled passes, which the tests compare with), so a
+model is plain arrays (persisted by :mod:`laban.models`) and scoring needs no hmmlearn.
 """
 
 from __future__ import annotations
@@ -36,32 +37,132 @@ class HMMSet:
 
     def log_likelihoods(self, seq: np.ndarray) -> np.ndarray:
         """(m,) log P(sequence | model) for a (T, d) feature sequence, all models at once."""
-        x = (np.asarray(seq, dtype=float) - self.centre) / self.scale
-        m, S, d = self.means.shape
-        inv = (1.0 / self.variances).reshape(m * S, d)
-        mu = self.means.reshape(m * S, d)
-        const = np.sum(np.log(2 * np.pi * self.variances), axis=2).ravel() + np.sum(mu * mu * inv, axis=1)
-        quad = (x * x) @ inv.T - 2.0 * x @ (mu * inv).T  # Σ (x − μ)²/σ² expanded: two matrix products
-        log_b = (-0.5 * (quad + const)).reshape(len(x), m, S)
-        top = log_b.max(axis=2, keepdims=True)  # (T, m, 1): emissions scaled per frame, logs added back
-        b = np.exp(log_b - top)
-        total = top[:, :, 0].sum(axis=0)
-        return np.array([_forward(self.start[k], self.transitions[k], np.ascontiguousarray(b[:, k]),
-                                  np.ascontiguousarray(log_b[:, k]), total[k]) for k in range(len(self.labels))])
+        return self.log_likelihoods_many(np.asarray(seq, dtype=float)[None])[0]
+
+    def log_likelihoods_many(self, seqs: np.ndarray, chunk: int = 64) -> np.ndarray:
+        """(n, m) log P(sequence | model) for equal-length sequences ``seqs`` (n, T, d), every
+        sequence and model at once (in chunks of ``chunk`` sequences, to bound the memory)."""
+        seqs = np.asarray(seqs, dtype=float)
+        out = np.empty((len(seqs), len(self.labels)))
+        for k in range(0, len(seqs), chunk):
+            out[k:k + chunk] = self._scores(seqs[k:k + chunk])
+        return out
+
+    def _scores(self, seqs: np.ndarray) -> np.ndarray:
+        n, T, d = seqs.shape
+        z = ((seqs - self.centre) / self.scale).transpose(1, 0, 2)  # time-major
+        density = _Densities(self.means, self.variances)
+        scale = np.zeros((n, len(self.labels)))  # the emissions' scales: their logs summed over frames
+
+        def scaled():  # emissions BLOCK frames at a time (cache-sized), scaled per frame and model
+            for t in range(0, T, BLOCK):
+                log_b = density(z[t:t + BLOCK])
+                top = _last_max(log_b)
+                scale[...] += top.sum(axis=0)
+                log_b -= top[..., None]
+                yield np.exp(log_b, out=log_b)
+
+        ll, under = _forward(self.start, self.transitions, scaled())
+        ll += scale
+        if under.any():  # a frame's scaled probabilities underflowed: those pairs again in log space
+            i, k = np.nonzero(under)
+            log_b = density(z[:, i])[:, np.arange(len(i)), k]
+            ll[i, k] = _forward_log(self.start[k], self.transitions[k], log_b)
+        return ll
 
 
-def _forward(start: np.ndarray, A: np.ndarray, b: np.ndarray, log_b: np.ndarray, offset: float) -> float:
-    """log P(observations): the scaled forward algorithm on emission probabilities ``b``
-    (T, S) scaled per frame (their logs' frame maxima summing to ``offset``), or — when a
-    frame's scaled probabilities underflow to zero — the same pass in log space. Uses
-    hmmlearn's compiled passes (private in hmmlearn 0.3.3)."""
-    from hmmlearn._hmmc import forward_log, forward_scaling
+BLOCK = 32  # frames of emissions made at once
+MIN_SUM = 1e-300  # a forward step whose probabilities sum below this has underflowed (as hmmlearn's)
 
-    try:
-        return offset + float(forward_scaling(start, A, b)[0])
-    except ValueError:  # underflow
+
+class _Densities:
+    """Log densities (T, n, m, S) of diagonal Gaussian states ``means``, ``variances`` (m, S, d)
+    for standardised frames (T, n, d): ``Σ (x − μ)²/σ²`` expanded, so one matrix product of
+    ``(x², x)`` does every state."""
+
+    def __init__(self, means: np.ndarray, variances: np.ndarray):
+        m, S, d = means.shape
+        inv = (1.0 / variances).reshape(m * S, d)
+        mu = means.reshape(m * S, d)
+        self.shape = (m, S)
+        self.weights = np.vstack([-0.5 * inv.T, (mu * inv).T])  # (2d, m S)
+        self.offset = 0.5 * (np.sum(np.log(2 * np.pi * variances), axis=2).ravel() + np.sum(mu * mu * inv, axis=1))
+
+    def __call__(self, z: np.ndarray) -> np.ndarray:
+        T, n, d = z.shape
+        x = np.concatenate([z * z, z], axis=2).reshape(T * n, 2 * d)
+        log_b = x @ self.weights
+        log_b -= self.offset
+        return log_b.reshape(T, n, *self.shape)
+
+
+def _last_max(x: np.ndarray) -> np.ndarray:
+    """``x.max(axis=-1)`` for a short last axis (numpy's reduction is several times slower there)."""
+    top = x[..., 0].copy()
+    for s in range(1, x.shape[-1]):
+        np.maximum(top, x[..., s], out=top)
+    return top
+
+
+def _forward(start: np.ndarray, A: np.ndarray, blocks) -> tuple[np.ndarray, np.ndarray]:
+    """The scaled forward algorithm of models ``start`` (m, S), ``A`` (m, S, S) on the emission
+    probabilities of n sequences, given in ``blocks`` of frames (each (k, n, m, S)):
+    ``(log P, underflowed)``, both (n, m), without the emissions' scale. A step is two matrix
+    products for every sequence and model (the transitions as one block-diagonal matrix, then
+    a block of ones giving every state its model's total); ``underflowed`` marks the pairs
+    where a step's probabilities summed below :data:`MIN_SUM` (their ``log P`` is then
+    meaningless). Equals hmmlearn's ``forward_scaling`` (up to rounding), which raises there
+    instead."""
+    m, S = start.shape
+    block = np.zeros((m * S, m * S))
+    for k in range(m):
+        block[k * S:(k + 1) * S, k * S:(k + 1) * S] = A[k]
+    ones = np.kron(np.eye(m), np.ones((S, S)))
+    a, log_p, under = None, 0.0, np.False_
+    for b in blocks:
+        k, n = b.shape[:2]
+        b = b.reshape(k, n, m * S)
+        sums = np.empty((k, n, m))
+        for t in range(k):
+            if a is None:
+                a = start.ravel() * b[t]
+            else:
+                a = a @ block
+                a *= b[t]
+            total = a @ ones
+            sums[t] = total[:, ::S]
+            a /= np.maximum(total, MIN_SUM, out=total)  # 0, never NaN, once underflowed
+        under = under | (sums < MIN_SUM).any(axis=0)
         with np.errstate(divide="ignore"):
-            return float(forward_log(start, A, log_b)[0])
+            log_p = log_p + np.log(sums).sum(axis=0)
+    return log_p, under
+
+
+def _forward_log(start: np.ndarray, A: np.ndarray, log_b: np.ndarray) -> np.ndarray:
+    """The forward algorithm in log space for p pairs: models ``start`` (p, S), ``A`` (p, S, S)
+    on log emission densities ``log_b`` (T, p, S); (p,) log P. Equals hmmlearn's ``forward_log``
+    (up to rounding). Left-to-right banded models (all of them, once trained) take the two
+    terms of each state at once (``logaddexp``)."""
+    with np.errstate(divide="ignore"):
+        log_start, log_A = np.log(start), np.log(A)
+        a = log_start + log_b[0]
+        if np.tril(A, -1).any() or np.triu(A, 2).any():
+            for t in range(1, len(log_b)):
+                a = _logsumexp(a[:, :, None] + log_A, axis=1) + log_b[t]
+        else:
+            stay, move = np.diagonal(log_A, axis1=1, axis2=2), np.diagonal(log_A, 1, axis1=1, axis2=2)
+            for t in range(1, len(log_b)):
+                to = a + stay
+                np.logaddexp(to[:, 1:], a[:, :-1] + move, out=to[:, 1:])
+                a = to + log_b[t]
+    return _logsumexp(a, axis=1)
+
+
+def _logsumexp(x: np.ndarray, axis: int) -> np.ndarray:
+    """log Σ exp along ``axis``; −inf where every term is −inf."""
+    top = np.maximum(x.max(axis=axis, keepdims=True), -np.finfo(float).max)  # finite: −inf − top is −inf
+    with np.errstate(divide="ignore"):
+        return np.log(np.sum(np.exp(x - top), axis=axis)) + np.squeeze(top, axis)
 
 
 def left_to_right(points: int, states: int = STATES) -> tuple[np.ndarray, np.ndarray]:

@@ -25,7 +25,7 @@ from scipy.optimize import minimize_scalar
 
 from laban import factors as factor_models
 from laban.bayes import fit_binary, select
-from laban.classify import bayes_drive, element_drive, quality
+from laban.classify import bayes_drive, element_drives, qualities
 from laban.efforts import DRIVES, ELEMENTS, FACTORS, STATES, element, state_of
 from laban.features import sequence, summary
 from laban.hmm import HMMSet, fit_set
@@ -129,7 +129,7 @@ def train(curves: list[Labelled], held_out: list[Labelled] | None = None, sets=S
 def calibrate(hmms: HMMSet, curves: list[Labelled], sets=SETS, points: int = POINTS) -> float:
     """The temperature T minimising the negative log-likelihood of the true Drives of
     ``curves`` under softmax(log-likelihood / T)."""
-    ll = np.array([hmms.log_likelihoods(sequence(c.t, c.p, c.q, sets, points)) for c in curves])
+    ll = hmms.log_likelihoods_many(np.stack([sequence(c.t, c.p, c.q, sets, points) for c in curves]))
     truth = np.array([hmms.labels.index(c.drive) for c in curves])
 
     def nll(log_t):
@@ -146,16 +146,16 @@ def evaluate(model: EffortModel, curves: list[Labelled]) -> dict:
     matrices, for the decisions applied (``effort``: the Time and Weight classifiers, Space
     by the Drive HMM) and the Naive Bayes, Drive HMM and Element HMM methods on ``curves``."""
     truth = [c.drive for c in curves]
-    seqs = [sequence(c.t, c.p, c.q, model.sets, model.points) for c in curves]
+    seqs = np.stack([sequence(c.t, c.p, c.q, model.sets, model.points) for c in curves])
     X = np.array([summary(c.t, c.p, c.q) for c in curves])
     labels = model.drives.labels
-    hmm = [labels[int(np.argmax(model.drives.log_likelihoods(s)))] for s in seqs]
-    applied = [quality(model, c.t, c.p, c.q).drive for c in curves]
+    hmm = [labels[int(k)] for k in np.argmax(model.drives.log_likelihoods_many(seqs), axis=1)]
+    applied = [e.drive for e in qualities(model, [(c.t, c.p, c.q) for c in curves])]
     predictions = {
         "effort": [a or h for a, h in zip(applied, hmm)],
         "naive_bayes": bayes_drive(model, X),
         "drive_hmm": hmm,
-        "element_hmm": [element_drive(model, s) for s in seqs],
+        "element_hmm": element_drives(model, seqs),
     }
     report = {"curves": len(curves), "methods": {}}
     for method, pred in predictions.items():

@@ -343,3 +343,20 @@ def test_normalise_uses_training_bounds():
     np.testing.assert_allclose(T01, [[0.5, 0.5, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
     np.testing.assert_array_equal(lo2, lo)
     np.testing.assert_array_equal(hi2, hi)
+
+
+def test_quantiles_median_and_gradient_equal_numpys_to_the_bit():
+    from laban.features import _gradient, _median, _quantiles
+
+    rng = np.random.default_rng(4)
+    for n in [1, 2, 3, 4, 5, 20, 21, 97, 400]:
+        for x in (rng.random(n) * 10 ** rng.uniform(-3, 3), np.round(rng.random(n), 1)):  # the second with ties
+            (p95, p0, p50, p100), median = _quantiles(x, (0.95, 0.0, 0.5, 1.0))
+            assert (p95, p0, p50, p100) == tuple(float(np.quantile(x, q)) for q in (0.95, 0.0, 0.5, 1.0))
+            assert median == _median(x) == float(np.median(x))
+            assert p95 == float(np.percentile(x, 95))
+        if n >= 2:
+            y = rng.normal(size=(n, 3))
+            assert np.array_equal(_gradient(y, 0.0123), np.gradient(y, 0.0123, axis=0))
+            assert np.array_equal(_gradient(y[:, 0], 0.0123), np.gradient(y[:, 0], 0.0123))
+    assert all(np.isnan(v) for v in _quantiles(np.array([1.0, np.nan, 2.0]), (0.95,))[0])

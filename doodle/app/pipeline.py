@@ -192,9 +192,10 @@ def compile_doodle(doodle: Doodle, library_dir=None, use_builtin: bool = True, p
     for track in doodle.tracks:
         tokens, segments = recognised[track.name]
         choices, styled = [], {}  # styled: one stylised clip per distinct (clip, quality), shared by its segments
-        for index, seg in enumerate(segments):
-            choices.append(choose(seg, track, actions, skeleton, rest, _quality_of(qualities, track.name, index),
-                                  effort_model, style, styled))
+        given = [_quality_of(qualities, track.name, index) for index in range(len(segments))]
+        efforts = track_efforts(effort_model, track, segments, given)
+        for seg, quality, effort in zip(segments, given, efforts):
+            choices.append(choose(seg, track, actions, skeleton, rest, quality, effort, style, styled))
             if progress:
                 done += 1
                 progress(done, total)
@@ -261,15 +262,14 @@ def scene(doodle: Doodle, actions: Actions, params: SegmenterParams, threshold: 
     return doodle, recognised
 
 
-def choose(seg, track, actions: Actions, skeleton, rest, given, effort_model, style: str,
-           styled: dict) -> Choice:
+def choose(seg, track, actions: Actions, skeleton, rest, given, effort, style: str, styled: dict) -> Choice:
     """The clip a segment plays on the output skeleton (the rest pose where its action has
     none): the first that travels the way the action means (a side step sideways, relative
     to its facing; :func:`retarget.clips.fits`) — the library's own before a retargeted
-    built-in one — stylised by the quality ``given`` or, without one, the one the effort
-    model recognises in the hand's motion (a cycle is never retimed: its pace is the
-    hand's travel; a jump's timing is left as it is — its flight lasts what gravity gives it
-    — and it takes the quality in its poses). ``styled``: stylised clips already made, by
+    built-in one — stylised by the quality ``given`` or, without one, the ``effort`` the
+    effort model recognised in the hand's motion (:func:`track_efforts`; a cycle is never
+    retimed: its pace is the hand's travel; a jump's timing is left as it is — its flight
+    lasts what gravity gives it — and it takes the quality in its poses). ``styled``: stylised clips already made, by
     clip and quality (filled here; segments asking for the same share one — a long doodle
     asks for the same few again and again, and clips are never changed in place)."""
     from retarget.clips import fits
@@ -281,9 +281,7 @@ def choose(seg, track, actions: Actions, skeleton, rest, given, effort_model, st
     clip = fitting[0] if fitting else rest
     name = seg.action if seg.action in library.names else "Idle"
     action = library.action(name) if name in library.names else library.action(rest.action)
-    effort = None
-    if given is None and effort_model is not None and seg.action != "unknown":
-        effort = effort_quality(effort_model, track, seg.start, seg.end)
+    if given is None and effort is not None:
         given = (_on_grid(effort.time), _on_grid(effort.weight))
     lt, lw = given or (0.0, 0.0)
     if action.cyclic:
@@ -754,8 +752,29 @@ def effort_quality(model, track, start: int, end: int):
     """The Effort recognised in samples [start, end] of a track (laban, §4.4)."""
     from laban.classify import quality as laban_quality
 
+    return laban_quality(model, *_piece(track, start, end))
+
+
+def track_efforts(model, track, segments, given) -> list:
+    """Per segment of a track, the Effort ``model`` recognises in it (:func:`effort_quality`),
+    all scored together — None without a model, where a quality is ``given`` and for an
+    ``unknown`` action."""
+    asked = [k for k, (seg, quality) in enumerate(zip(segments, given))
+             if model is not None and quality is None and seg.action != "unknown"]
+    efforts = [None] * len(segments)
+    if asked:
+        from laban.classify import qualities as laban_qualities
+
+        pieces = [_piece(track, segments[k].start, segments[k].end) for k in asked]
+        for k, effort in zip(asked, laban_qualities(model, pieces)):
+            efforts[k] = effort
+    return efforts
+
+
+def _piece(track, start: int, end: int) -> tuple:
+    """``(t, p, q)`` of samples [start, end] of a track."""
     seg = slice(start, min(end + 1, len(track.t)))
-    return laban_quality(model, track.t[seg], track.p[seg], track.q[seg])
+    return track.t[seg], track.p[seg], track.q[seg]
 
 
 def _stylized(clip, lt: float, lw: float, style: str = "modifiers", cycle: bool = False):
