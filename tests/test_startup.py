@@ -147,6 +147,16 @@ def test_the_command_line_parser_imports_no_numerical_library(tmp_path):
     assert not {m for m in mods if m.split(".")[0] in ("numpy", "scipy", "pandas", "sklearn", "lark")}
 
 
+
+def test_a_command_builds_and_imports_only_its_own_parser(tmp_path):
+    """``doodle --help`` imports no command's module; ``doodle compile`` only its own."""
+    code = "from doodle.app.cli.main import build_parser, named_command; build_parser(named_command({!r}))"
+    cli = {"doodle.app.cli", "doodle.app.cli.main", "doodle.app.cli.options"}
+    mods = _imported(code.format(["--help"]), tmp_path)
+    assert {m for m in mods if m.startswith("doodle.app.cli")} == cli
+    mods = _imported(code.format(["compile", "x", "-o", "y"]), tmp_path)
+    assert {m for m in mods if m.startswith("doodle.app.cli")} == cli | {"doodle.app.cli.compile"}
+
 def test_a_compile_imports_no_library_it_does_not_use(tmp_path):
     code = (f"from doodle.app.cli.main import main; main(['compile', {str(DEMO)!r}, '-o', {str(tmp_path / 'out')!r}])\n"
             f"main(['compile', {str(DEMO)!r}, '-o', {str(tmp_path / 'out')!r}])")

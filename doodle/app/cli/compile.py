@@ -10,9 +10,8 @@ from doodle.core.errors import DoodleError
 from doodle.app.cli.options import input_options, library_options, load_input, progress_bar, segmenter_options, segmenter_params
 
 
-def add_parser(sub) -> None:
-    p = sub.add_parser("compile", help="compile a doodle into BVH animation (one file per track) and report.json; "
-                                       "several doodles, or folders of them, at once")
+def add_arguments(p) -> None:
+    """The arguments of ``doodle compile``."""
     p.add_argument("files", nargs="+", metavar="FILE",
                    help="a doodle file (.doodle, or .csv with --convention); several files, or folders (every "
                         ".doodle and .csv file in them), are compiled in parallel, each into OUTDIR/STEM/")
