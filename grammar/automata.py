@@ -25,7 +25,6 @@ import numpy as np
 
 from doodle.core.errors import DoodleError
 from doodle.core.tokens import CODES, N_CODES, NAMES
-from grammar.expr import Alt, Cat, Repeat, Sym
 
 SYMBOLS = tuple(sorted(CODES.values()))  # the 53 token codes
 
@@ -62,6 +61,8 @@ class _NFA:
 
     def build(self, node) -> tuple[int, int]:
         """Fragment ``(start, end)`` recognising ``node``."""
+        from grammar.expr import Alt, Cat, Repeat, Sym  # here: DFAs read from the cache need no parse tree
+
         if isinstance(node, Sym):
             s, t = self.state(), self.state()
             self.moves[s].append((node.code, t))

@@ -10,7 +10,6 @@ from doodle.core.errors import DoodleError
 from doodle.core.tokens import CODES
 from grammar.automata import DFA, check_language, compile_expression, intersection_witness, sample, shortest
 from grammar.constraints import parse_constraints
-from grammar.expr import parse
 from grammar.matcher import Automaton
 from grammar.shapes import ShapeSet, load_shape, shape_set
 from library.manifest import ActionDef, Library
@@ -75,6 +74,8 @@ def compile_action(action: ActionDef, known: dict | None = None) -> DFA:
     ``known``: DFAs already compiled, by expression text (read back from a cache)."""
     if known and action.expression in known:
         return known[action.expression]
+    from grammar.expr import parse  # here: a compile whose DFAs are cached parses no expression
+
     try:
         dfa = compile_expression(parse(action.expression, action.name))
         check_language(dfa, action.name)
