@@ -31,6 +31,8 @@ SYMBOLS = tuple(sorted(CODES.values()))  # the 53 token codes
 
 @dataclass(frozen=True, eq=False)
 class DFA:
+    """A deterministic automaton over token codes: its transition table and accepting states."""
+
     table: np.ndarray  # (n, N_CODES) int: next state, -1 when the token is rejected
     accept: np.ndarray  # (n,) bool; the start state is 0
 

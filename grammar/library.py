@@ -17,6 +17,8 @@ from library.manifest import ActionDef, Library
 
 @dataclass(frozen=True, eq=False)
 class Compiled:
+    """A library's recognisable actions with their minimal DFAs (and the Matcher's tables, built once)."""
+
     library: Library
     dfas: tuple[DFA, ...]
     roles: "Compiled | None" = None  # interaction-only actions, matched by the Contexter
@@ -145,6 +147,8 @@ def compile_roles(library: Library, known: dict | None = None) -> Compiled | Non
 
 @dataclass(frozen=True)
 class Overlap:
+    """Two actions whose languages intersect, with a shortest token string both accept."""
+
     first: str
     second: str
     witness: tuple[str, ...]  # a shortest compacted token string both accept
