@@ -25,13 +25,14 @@ import numpy as np
 
 from doodle.core.errors import DoodleError
 from doodle.core.tokens import CODES, N_CODES, NAMES
-from grammar.expr import Alt, Cat, Repeat, Sym
 
 SYMBOLS = tuple(sorted(CODES.values()))  # the 53 token codes
 
 
 @dataclass(frozen=True, eq=False)
 class DFA:
+    """A deterministic automaton over token codes: its transition table and accepting states."""
+
     table: np.ndarray  # (n, N_CODES) int: next state, -1 when the token is rejected
     accept: np.ndarray  # (n,) bool; the start state is 0
 
@@ -62,6 +63,8 @@ class _NFA:
 
     def build(self, node) -> tuple[int, int]:
         """Fragment ``(start, end)`` recognising ``node``."""
+        from grammar.expr import Alt, Cat, Repeat, Sym  # here: DFAs read from the cache need no parse tree
+
         if isinstance(node, Sym):
             s, t = self.state(), self.state()
             self.moves[s].append((node.code, t))

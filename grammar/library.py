@@ -10,7 +10,6 @@ from doodle.core.errors import DoodleError
 from doodle.core.tokens import CODES
 from grammar.automata import DFA, check_language, compile_expression, intersection_witness, sample, shortest
 from grammar.constraints import parse_constraints
-from grammar.expr import parse
 from grammar.matcher import Automaton
 from grammar.shapes import ShapeSet, load_shape, shape_set
 from library.manifest import ActionDef, Library
@@ -18,6 +17,8 @@ from library.manifest import ActionDef, Library
 
 @dataclass(frozen=True, eq=False)
 class Compiled:
+    """A library's recognisable actions with their minimal DFAs (and the Matcher's tables, built once)."""
+
     library: Library
     dfas: tuple[DFA, ...]
     roles: "Compiled | None" = None  # interaction-only actions, matched by the Contexter
@@ -75,6 +76,8 @@ def compile_action(action: ActionDef, known: dict | None = None) -> DFA:
     ``known``: DFAs already compiled, by expression text (read back from a cache)."""
     if known and action.expression in known:
         return known[action.expression]
+    from grammar.expr import parse  # here: a compile whose DFAs are cached parses no expression
+
     try:
         dfa = compile_expression(parse(action.expression, action.name))
         check_language(dfa, action.name)
@@ -144,6 +147,8 @@ def compile_roles(library: Library, known: dict | None = None) -> Compiled | Non
 
 @dataclass(frozen=True)
 class Overlap:
+    """Two actions whose languages intersect, with a shortest token string both accept."""
+
     first: str
     second: str
     witness: tuple[str, ...]  # a shortest compacted token string both accept

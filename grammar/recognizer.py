@@ -209,6 +209,8 @@ class _Tape:
 
 @dataclass(frozen=True)
 class _TrackView:
+    """One track of the live recogniser's tape (_Tape): its samples so far, as the Segmenter reads a Track."""
+
     name: str
     t: np.ndarray
     p: np.ndarray

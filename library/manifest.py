@@ -74,6 +74,8 @@ ROLES = ("pelvis", "chest", "head", "left_foot", "right_foot", "left_hand", "rig
 
 @dataclass(frozen=True)
 class ActionDef:
+    """One action of a library manifest: its expression, flags, clips and behaviour."""
+
     name: str
     expression: str
     cyclic: bool
@@ -98,6 +100,8 @@ class ActionDef:
 
 @dataclass(frozen=True)
 class Interaction:
+    """An interaction of a library manifest: its actions, constraints, contact and placement."""
+
     name: str
     actions: tuple[str, ...]
     constraints: tuple[str, ...] = ()  # in the thesis's notation, e.g. "D(0, 1, Personal)" (§6.3)
@@ -108,6 +112,8 @@ class Interaction:
 
 @dataclass(frozen=True)
 class Library:
+    """An action library as its manifest (library.toml) defines it."""
+
     name: str
     actions: tuple[ActionDef, ...]
     source: str

@@ -64,7 +64,6 @@ import math
 import numbers
 import re
 import warnings
-from decimal import ROUND_HALF_EVEN, Decimal
 from pathlib import Path
 
 import numpy as np
@@ -652,7 +651,11 @@ def _format_rows(data: np.ndarray, precision: int) -> str:
     q = np.rint(scaled)
     # ``scaled`` is rounded; only where it lands exactly on a half can that rounding change
     # the decimal rounding of the true value: settle those few exactly.
-    for i in np.flatnonzero(scaled - np.floor(scaled) == 0.5).tolist():
+    halves = np.flatnonzero(scaled - np.floor(scaled) == 0.5).tolist()
+    if halves:
+        from decimal import ROUND_HALF_EVEN, Decimal  # here: most outputs have no such value
+
+    for i in halves:
         q[i] = float(Decimal(float(a[i])).scaleb(precision).to_integral_value(ROUND_HALF_EVEN))
     q = q.astype(np.int64)
     whole, frac = np.divmod(q, 10 ** precision)

@@ -31,6 +31,8 @@ from retarget.skeleton import Motion, Skeleton, forward_kinematics
 
 @dataclass(frozen=True, eq=False)
 class Clip:
+    """A library clip as the compile uses it: on the floor, facing front, analysed."""
+
     action: str
     path: str
     motion: Motion

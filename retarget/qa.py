@@ -45,6 +45,8 @@ from retarget.skeleton import Motion, end_site_positions, forward_kinematics, ki
 
 @dataclass(frozen=True)
 class Limits:
+    """The thresholds of the animation check."""
+
     slide: float = 0.3  # m/s: a flat foot moving faster slides
     flat: float = 0.01  # m: every point of a foot within this of its standing height: flat on the floor
     stance: float = 0.1  # s: ... for at least this long

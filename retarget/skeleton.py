@@ -26,6 +26,8 @@ ROTATION_CHANNELS = ("Xrotation", "Yrotation", "Zrotation")
 
 @dataclass(frozen=True, eq=False)
 class Skeleton:
+    """A BVH skeleton: joint names, parents, rest offsets, channels and End Sites."""
+
     names: tuple[str, ...]
     parents: np.ndarray  # (J,) int, -1 for the root, parents[j] < j
     offsets: np.ndarray  # (J, 3) rest offset from the parent, metres
@@ -62,6 +64,8 @@ class Skeleton:
 
 @dataclass(frozen=True, eq=False)
 class Motion:
+    """An animation of a skeleton: each frame's local translations and rotations."""
+
     skeleton: Skeleton
     translations: np.ndarray  # (F, J, 3) local translation of each joint, metres
     rotations: np.ndarray  # (F, J, 4) local rotation quaternions xyzw

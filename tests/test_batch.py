@@ -134,7 +134,9 @@ def test_a_folder_means_its_doodle_and_csv_files(tmp_path):
     (tmp_path / "sub.doodle").mkdir()
     assert batch.expand_inputs([str(tmp_path), "x.doodle"]) == [str(tmp_path / n) for n in ("A.CSV", "b.doodle",
                                                                                              "c.csv")] + ["x.doodle"]
-    assert batch.is_batch([str(tmp_path)]) and batch.is_batch(["a", "b"]) and not batch.is_batch(["a.doodle"])
+    from doodle.app.cli.compile import is_batch
+
+    assert is_batch([str(tmp_path)]) and is_batch(["a", "b"]) and not is_batch(["a.doodle"])
 
 
 def test_a_folder_without_doodles_is_refused(tmp_path, capsys):

@@ -123,3 +123,33 @@ def test_calibrate_writes_a_file_tokens_reads(tmp_path, capsys):
     assert main(["tokens", "--calibration", str(cal), str(forward)]) == 0
     assert "T_Z" in capsys.readouterr().out
     assert main(["calibrate", "-o", str(cal)]) == 1
+
+
+def _help(parser, argv) -> tuple[int, str]:
+    """What ``parser`` prints (stdout and stderr) and its exit status for ``argv``."""
+    import contextlib
+    import io
+
+    out = io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(out):
+        try:
+            parser.parse_args(argv)
+            status = 0
+        except SystemExit as e:
+            status = e.code
+    return status, out.getvalue()
+
+
+def test_the_parser_built_for_one_command_says_what_the_whole_one_does():
+    """``doodle`` builds only the named command's arguments (the others by name and help
+    line): every help text and usage error is the same as the whole parser's."""
+    from doodle.app.cli.main import COMMANDS, build_parser, named_command
+
+    whole = build_parser()
+    cases = [[], ["--help"], ["nosuch"], ["-1", "compile"], ["--", "compile"], ["compile", "x", "--bogus"],
+             ["library"], ["laban", "eval", "--help"], ["library", "show", "--help"]]
+    cases += [[name, "--help"] for name, *_ in COMMANDS] + [[name] for name, *_ in COMMANDS]
+    for argv in cases:
+        assert _help(build_parser(named_command(argv)), argv) == _help(whole, argv), argv
+    assert named_command(["--help"]) == named_command(["nosuch"]) == []
+    assert named_command(["-1", "compile", "x"]) == ["compile"]

@@ -3,7 +3,6 @@
 still equals the batch; a provisional name is the one decided in all but a few cases; and
 ``doodle replay`` and ``doodle record`` show it, marked."""
 
-import argparse
 import copy
 from pathlib import Path
 
@@ -160,8 +159,7 @@ def test_without_provisional_labels_the_stream_is_the_same(compiled):
 
 def test_replay_and_record_show_provisional_names(compiled, capsys, tmp_path, monkeypatch):
     import grammar.recognizer
-    from doodle.app.cli.main import main
-    from doodle.app.cli.record import add_parser
+    from doodle.app.cli.main import build_parser, main
 
     assert main(["replay", str(DEMO), "--speed", "0"]) == 0
     out = capsys.readouterr().out
@@ -170,8 +168,7 @@ def test_replay_and_record_show_provisional_names(compiled, capsys, tmp_path, mo
     assert "a gesture's name shown after it ends: median 0.2" in out
 
     monkeypatch.setattr(grammar.recognizer, "load_actions", lambda *a: compiled)
-    parser = argparse.ArgumentParser(prog="doodle")
-    add_parser(parser.add_subparsers(dest="command"))
+    parser = build_parser(["record"])
     args = parser.parse_args(["record", "-o", str(tmp_path / "take.doodle"), "--source", "synthetic", "--seconds", "2.5"])
     assert args.run(args) == 0
     out = capsys.readouterr().out

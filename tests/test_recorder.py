@@ -323,10 +323,9 @@ def test_missing_steamvr_is_one_clear_line(capfd):
 
 def test_record_command_without_steamvr_leaves_no_file(tmp_path, capfd):
     _no_steamvr()
-    from doodle.app.cli.record import add_parser
+    from doodle.app.cli.main import build_parser
 
-    parser = argparse.ArgumentParser(prog="doodle")
-    add_parser(parser.add_subparsers(dest="command"))
+    parser = build_parser(["record"])
     path = tmp_path / "live.doodle"
     args = parser.parse_args(["record", "-o", str(path), "--seconds", "5", "--trigger"])
     with pytest.raises(DoodleError, match="SteamVR is not running.*doodle replay"):
@@ -337,11 +336,10 @@ def test_record_command_without_steamvr_leaves_no_file(tmp_path, capfd):
 
 def test_record_command_with_the_synthetic_source(tmp_path, capsys, monkeypatch, compiled):
     import grammar.recognizer
-    from doodle.app.cli.record import add_parser
+    from doodle.app.cli.main import build_parser
 
     monkeypatch.setattr(grammar.recognizer, "load_actions", lambda *a: compiled)
-    parser = argparse.ArgumentParser(prog="doodle")
-    add_parser(parser.add_subparsers(dest="command"))
+    parser = build_parser(["record"])
     path = tmp_path / "synthetic.doodle"
     args = parser.parse_args(["record", "-o", str(path), "--source", "synthetic", "--seconds", "0.6"])
     assert args.run(args) == 0

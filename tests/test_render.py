@@ -6,7 +6,6 @@ rest (colours, geometry, errors) run everywhere.
 
 from __future__ import annotations
 
-import argparse
 import sys
 from pathlib import Path
 
@@ -108,10 +107,9 @@ def test_missing_pyrender_is_one_clear_line(monkeypatch):
 
 
 def _cli(argv):
-    from doodle.app.cli.render import add_parser
+    from doodle.app.cli.main import build_parser
 
-    parser = argparse.ArgumentParser(prog="doodle")
-    add_parser(parser.add_subparsers())
+    parser = build_parser(["render"])
     args = parser.parse_args(["render", *argv])
     return args.run(args)
 

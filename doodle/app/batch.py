@@ -50,11 +50,6 @@ class Row:
 
 # --- inputs and outputs -------------------------------------------------------------------
 
-def is_batch(names: list[str]) -> bool:
-    """Several inputs, or a folder: not the single compile."""
-    return len(names) != 1 or Path(names[0]).is_dir()
-
-
 def folder_inputs(folder: Path) -> list[str]:
     """The doodle files directly in ``folder`` (suffixes :data:`INPUT_SUFFIXES`), by name;
     a DoodleError when there is none."""

@@ -32,13 +32,15 @@ import json
 import sys
 import warnings
 from dataclasses import asdict, dataclass, replace
+from itertools import accumulate
+from math import prod
 from pathlib import Path
 
 import numpy as np
 
 from doodle.core import cache
 
-FORMAT = 1
+FORMAT = 2  # 2: every field of the clips and DFAs one array (a few large members read faster than many)
 _ROOT = Path(__file__).resolve().parents[2]
 _CODE = ("doodle/core", "grammar", "retarget", "library", "doodle/app/libcache.py", "doodle/app/pipeline.py")
 _VERSION: list[str] = []
@@ -80,6 +82,34 @@ def _meta(kind: str, key: str, **fields) -> np.ndarray:
     return np.array(json.dumps({"format": FORMAT, "kind": kind, "key": key, **fields}))
 
 
+def _joined(kind: str, parts: dict, dtypes: dict) -> tuple[dict, dict]:
+    """Each field's arrays (``{field: [array, ...]}``) flattened into one array named
+    ``KIND_FIELD`` (a few large archive members read faster than many small ones), and the
+    arrays' shapes (``{field: [shape, ...]}``, for the JSON header)."""
+    arrays, shapes = {}, {}
+    for name, pieces in parts.items():
+        pieces = [np.asarray(a, dtype=dtypes[name]) for a in pieces]
+        arrays[f"{kind}_{name}"] = np.concatenate([a.reshape(-1) for a in pieces] + [np.zeros(0, dtypes[name])])
+        shapes[name] = [list(a.shape) for a in pieces]
+    return arrays, shapes
+
+
+def _split(arrays: dict, kind: str, shapes: dict, dtypes: dict) -> dict:
+    """What :func:`_joined` joined: ``{field: [array, ...]}`` of the ``shapes`` given, each
+    a view of the field's array; ValueError unless the arrays are exactly that long and of
+    the ``dtypes`` given."""
+    out = {}
+    for name, dtype in dtypes.items():
+        flat, listed = arrays[f"{kind}_{name}"], shapes[name]
+        if not all(isinstance(s, list) and all(type(n) is int and n >= 0 for n in s) for s in listed):
+            raise ValueError(f"{kind} {name}: shapes")
+        ends = list(accumulate((prod(s) for s in listed), initial=0))
+        if flat.dtype != dtype or flat.shape != (ends[-1],):
+            raise ValueError(f"{kind} {name}: size")
+        out[name] = [flat[a:b].reshape(s) for a, b, s in zip(ends[:-1], ends[1:], listed)]
+    return out
+
+
 # --- automata ---------------------------------------------------------------------------------
 
 def _expressions(library) -> list[str]:
@@ -101,9 +131,9 @@ def read_dfas(library) -> tuple[str, dict]:
         meta = _header(arrays, "dfas", key)
         if meta["expressions"] != expressions:
             raise ValueError("other expressions")
+        parts = _split(arrays, "dfas", meta["shapes"], {"table": np.int64, "accept": bool})
         known = {}
-        for i, text in enumerate(expressions):
-            table, accept = arrays[f"dfa{i}_table"], arrays[f"dfa{i}_accept"]
+        for text, table, accept in zip(expressions, parts["table"], parts["accept"], strict=True):
             if (table.dtype != np.int64 or table.ndim != 2 or table.shape[1] != N_CODES or accept.dtype != bool
                     or accept.shape != (len(table),) or len(table) == 0 or table.min() < -1
                     or table.max() >= len(table)):
@@ -121,10 +151,10 @@ def write_dfas(key: str, compiled) -> None:
         if part is not None:
             by_text.update({a.expression: d for a, d in zip(part.library.actions, part.dfas)})
     expressions = sorted(by_text)
-    arrays = {"meta": _meta("dfas", key, expressions=expressions)}
-    for i, text in enumerate(expressions):
-        arrays[f"dfa{i}_table"] = np.asarray(by_text[text].table, dtype=np.int64)
-        arrays[f"dfa{i}_accept"] = np.asarray(by_text[text].accept, dtype=bool)
+    arrays, shapes = _joined("dfas", {"table": [by_text[text].table for text in expressions],
+                                      "accept": [by_text[text].accept for text in expressions]},
+                             {"table": np.int64, "accept": bool})
+    arrays["meta"] = _meta("dfas", key, expressions=expressions, shapes=shapes)
     cache.write("dfas", key, arrays)
 
 
@@ -238,24 +268,28 @@ class Note:
         warnings.warn_explicit(self.message, category, self.filename, self.lineno)
 
 
+_CLIP_FIELDS = {"parents": np.int64, "offsets": float, "end_sites": float, "translations": float, "rotations": float,
+                "contacts": bool}  # each clip's arrays, and their types in the cache
+
+
 def write_clips(key: str, clips: dict, directions: dict, said: list = ()) -> None:
     """Store a library's analysed clips (``{action: [Clip]}``), travel directions and the
     warnings given while analysing them (:class:`Note`)."""
-    arrays, listed, k = {}, {}, 0
+    listed, parts = {}, {name: [] for name in _CLIP_FIELDS}
     for action, found in clips.items():
         listed[action] = []
         for clip in found:
             sk, m = clip.motion.skeleton, clip.motion
             listed[action].append(_clip_meta(clip))
-            arrays[f"c{k}_parents"] = np.asarray(sk.parents, dtype=np.int64)
-            arrays[f"c{k}_offsets"] = np.asarray(sk.offsets, dtype=float)
-            arrays[f"c{k}_end_sites"] = np.array([sk.end_sites[j] for j in sk.end_sites], dtype=float).reshape(-1, 3)
-            arrays[f"c{k}_translations"] = np.asarray(m.translations, dtype=float)
-            arrays[f"c{k}_rotations"] = np.asarray(m.rotations, dtype=float)
-            arrays[f"c{k}_contacts"] = np.asarray(clip.contacts, dtype=bool)
-            k += 1
+            parts["parents"].append(sk.parents)
+            parts["offsets"].append(sk.offsets)
+            parts["end_sites"].append(np.array([sk.end_sites[j] for j in sk.end_sites], dtype=float).reshape(-1, 3))
+            parts["translations"].append(m.translations)
+            parts["rotations"].append(m.rotations)
+            parts["contacts"].append(clip.contacts)
+    arrays, shapes = _joined("clips", parts, _CLIP_FIELDS)
     arrays["meta"] = _meta("clips", key, clips=listed, directions={a: float(v) for a, v in directions.items()},
-                           said=[asdict(n) for n in said])
+                           said=[asdict(n) for n in said], shapes=shapes)
     cache.write("clips", key, arrays)
 
 
@@ -270,17 +304,20 @@ def read_clips(key: str) -> tuple[dict, dict, list] | None:
         return None
     try:
         meta = _header(arrays, "clips", key)
+        parts = _split(arrays, "clips", meta["shapes"], _CLIP_FIELDS)
+        if any(len(p) != sum(len(listed) for listed in meta["clips"].values()) for p in parts.values()):
+            raise ValueError("clips")
         clips, k = {}, 0
         for action, listed in meta["clips"].items():
             clips[action] = []
             for c in listed:
-                ends = arrays[f"c{k}_end_sites"]
+                ends = parts["end_sites"][k]
                 if ends.shape != (len(c["end_sites"]), 3):
                     raise ValueError("end sites")
-                sk = Skeleton(tuple(c["names"]), arrays[f"c{k}_parents"], arrays[f"c{k}_offsets"],
+                sk = Skeleton(tuple(c["names"]), parts["parents"][k], parts["offsets"][k],
                               tuple(tuple(ch) for ch in c["channels"]), dict(zip(c["end_sites"], ends)))
-                motion = Motion(sk, arrays[f"c{k}_translations"], arrays[f"c{k}_rotations"], c["frame_time"])
-                contacts = arrays[f"c{k}_contacts"]
+                motion = Motion(sk, parts["translations"][k], parts["rotations"][k], c["frame_time"])
+                contacts = parts["contacts"][k]
                 if contacts.shape != (motion.frames, 2) or contacts.dtype != bool:
                     raise ValueError("contacts")
                 clips[action].append(Clip(c["action"], c["path"], motion, dict(c["roles"]), Stages(*c["stages"]),

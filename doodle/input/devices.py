@@ -27,6 +27,8 @@ IDENTITY = (0.0, 0.0, 0.0, 1.0)
 
 @dataclass(frozen=True)
 class DeviceProfile:
+    """A tracked device's name, nominal rate, mount (device to figurine) and description."""
+
     name: str
     rate: float  # nominal samples per second
     mount: tuple[float, float, float, float]  # device-to-figurine quaternion, xyzw

@@ -9,7 +9,6 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from doodle.input.csvimport import read_csv
 from doodle.input.devices import mount_doodle, profile
 from doodle.core.errors import DoodleError
 from doodle.input.fileformat import read_doodle
@@ -34,6 +33,8 @@ def load(path, convention: str | None = None, columns: dict | None = None,
             raise DoodleError(
                 f"{path}: a CSV file does not say its coordinate convention; name it: unity, openvr or doodle"
             )
+        from doodle.input.csvimport import read_csv  # here: a doodle file needs no CSV reader
+
         doodle = read_csv(path, convention=convention, columns=columns)
     else:
         if convention is not None:

@@ -51,6 +51,8 @@ LIMITS = {"eps": 1e3, "theta": 1e3, "alpha_s": 10.0, "smooth_s": 1.0, "savgol_wi
 
 @dataclass(frozen=True)
 class SegmenterParams:
+    """The Segmenter's thresholds and filters (``doodle calibrate`` measures a prop's own)."""
+
     eps: float = 0.05  # m/s: a sample is still when ‖(v, θω)‖ ≤ eps
     theta: float = 0.3  # m/rad: translation when ‖v‖ ≥ theta·‖ω‖
     alpha_s: float = 5 / 90  # seconds a bin must hold to become a token (5 samples at 90 Hz)

@@ -10,9 +10,8 @@ from doodle.core.errors import DoodleError
 from doodle.app.cli.options import input_options, library_options, load_input, progress_bar, segmenter_options, segmenter_params
 
 
-def add_parser(sub) -> None:
-    p = sub.add_parser("compile", help="compile a doodle into BVH animation (one file per track) and report.json; "
-                                       "several doodles, or folders of them, at once")
+def add_arguments(p) -> None:
+    """The arguments of ``doodle compile``."""
     p.add_argument("files", nargs="+", metavar="FILE",
                    help="a doodle file (.doodle, or .csv with --convention); several files, or folders (every "
                         ".doodle and .csv file in them), are compiled in parallel, each into OUTDIR/STEM/")
@@ -53,9 +52,13 @@ def add_parser(sub) -> None:
     p.set_defaults(run=cmd_compile)
 
 
-def cmd_compile(args) -> int:
-    from doodle.app.batch import is_batch
+def is_batch(names: list[str]) -> bool:
+    """Several inputs, or a folder: a batch (:mod:`doodle.app.batch`, imported only then), not
+    the single compile."""
+    return len(names) != 1 or Path(names[0]).is_dir()
 
+
+def cmd_compile(args) -> int:
     if is_batch(args.files):
         return cmd_compile_batch(args)
     report, checks = compile_scene(args.files[0], args.output, args, progress_bar("segments"))
@@ -85,11 +88,13 @@ def compile_scene(file, output, args, progress=None) -> tuple[dict, dict]:
     from retarget.bvh import write_bvh
     from retarget.qa import check_scene, check_world
 
-    from retarget.terrain import parse_terrain
-
     out = check_dir(output)
     params, mounts = segmenter_params(args)
-    terrain = parse_terrain(args.terrain) if args.terrain else None
+    terrain = None  # flat
+    if args.terrain:
+        from retarget.terrain import parse_terrain
+
+        terrain = parse_terrain(args.terrain)
     doodle = load_input(file, args, mounts)
     from doodle.app.pipeline import read_edits
 

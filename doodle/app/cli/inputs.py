@@ -10,8 +10,8 @@ from doodle.core.files import output_file
 from doodle.app.cli.options import each_file, input_options, load_input, segmenter_options, segmenter_params
 
 
-def add_tokens_parser(sub) -> None:
-    p = sub.add_parser("tokens", help="print the motion tokens of doodle or CSV files")
+def add_tokens_arguments(p) -> None:
+    """The arguments of ``doodle tokens``."""
     p.add_argument("files", nargs="+", metavar="FILE")
     input_options(p)
     p.add_argument("--json", action="store_true", help="one JSON object per file per line")
@@ -20,20 +20,24 @@ def add_tokens_parser(sub) -> None:
     p.set_defaults(run=cmd_tokens)
 
 
-def add_parser(sub) -> None:
-    p = sub.add_parser("import", help="convert a CSV recording into a doodle file")
+def add_import_arguments(p) -> None:
+    """The arguments of ``doodle import``."""
     p.add_argument("file", metavar="CSV")
     p.add_argument("-o", "--output", required=True, metavar="FILE.doodle")
     p.add_argument("--overwrite", action="store_true", help="replace FILE.doodle if it exists")
     input_options(p)
     p.set_defaults(run=cmd_import)
 
-    p = sub.add_parser("info", help="describe doodle files: device, rate, tracks, lost tracking")
+
+def add_info_arguments(p) -> None:
+    """The arguments of ``doodle info``."""
     p.add_argument("files", nargs="+", metavar="FILE")
     input_options(p)
     p.set_defaults(run=cmd_info)
 
-    p = sub.add_parser("calibrate", help="measure a prop's forward and the Segmenter's thresholds")
+
+def add_calibrate_arguments(p) -> None:
+    """The arguments of ``doodle calibrate``."""
     p.add_argument("-o", "--output", required=True, metavar="FILE.toml")
     p.add_argument("--overwrite", action="store_true", help="replace FILE.toml if it exists")
     p.add_argument("--forward", metavar="FILE", help="hold the prop still facing forward, then push it forward")

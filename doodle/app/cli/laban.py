@@ -17,8 +17,8 @@ from doodle.core.files import output_dir, output_file
 DEFAULT_EVAL_DIR = "out/laban-eval"
 
 
-def add_parser(sub) -> None:
-    p = sub.add_parser("laban", help="Laban Effort models: train, eval, classify, label, record")
+def add_arguments(p) -> None:
+    """The arguments of ``doodle laban``."""
     lsub = p.add_subparsers(dest="laban_command", required=True, metavar="train|eval|classify|label|record")
 
     q = lsub.add_parser("train", help="train effort models from labelled doodles and/or generated curves")

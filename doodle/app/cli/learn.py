@@ -22,10 +22,10 @@ from pathlib import Path
 from doodle.core.errors import DoodleError
 
 
-def add_parser(sub) -> None:
+def add_arguments(p) -> None:
+    """The arguments of ``doodle learn``."""
     from doodle.app.cli.options import input_options, segmenter_options
 
-    p = sub.add_parser("learn", help="learn a new action from three (or more) performed examples")
     p.add_argument("name", help="the new action's name")
     p.add_argument("examples", nargs="*", help="doodle or CSV files, one performance each")
     p.add_argument("--library", required=True, metavar="DIR", help="user library to add it to (created if missing; "

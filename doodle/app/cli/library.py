@@ -9,8 +9,8 @@ from doodle.core.files import output_file
 from doodle.app.cli.options import library_of, library_options
 
 
-def add_parser(sub) -> None:
-    p = sub.add_parser("library", help="action libraries: list, show, check, sheet, import")
+def add_arguments(p) -> None:
+    """The arguments of ``doodle library``."""
     lsub = p.add_subparsers(dest="library_command", required=True, metavar="list|show|check|sheet|import")
     for cmd, text in (("list", "every action with its flags and expression"),
                       ("check", "compile every expression and report overlapping actions")):

@@ -47,7 +47,6 @@ def segmenter_params(args):
 
 
 def load_input(path, args, mounts, raw=False):
-    from doodle.input.csvimport import parse_column_map
     from doodle.input.loader import load
 
     from pathlib import Path
@@ -58,7 +57,11 @@ def load_input(path, args, mounts, raw=False):
                           "openvr or doodle")
     if not is_csv and args.convention is not None and Path(path).is_file():
         raise DoodleError(f"{path}: --convention applies to CSV input; a doodle file's header names its own")
-    columns = parse_column_map(args.columns) if args.columns else None
+    columns = None
+    if args.columns:
+        from doodle.input.csvimport import parse_column_map
+
+        columns = parse_column_map(args.columns)
     tracks = [t.strip() for t in args.tracks.split(",") if t.strip()] if args.tracks else None
     return load(path, args.convention, columns, tracks, mounts, raw)
 

@@ -14,8 +14,8 @@ from doodle.core.files import within
 EXIT_FAILS = 4  # the animation fails the check (bad input is 1)
 
 
-def add_parser(sub) -> None:
-    p = sub.add_parser("qa", help="check a compiled scene's animation: sliding, pops, turns, hovering, interpenetration")
+def add_arguments(p) -> None:
+    """The arguments of ``doodle qa``."""
     p.add_argument("folder", metavar="OUTDIR",
                    help="what `doodle compile -o OUTDIR` wrote, or a folder of BVH files (each on its own floor)")
     p.add_argument("--terrain", metavar="SPEC", help="the ground (default: the one report.json names, else flat)")

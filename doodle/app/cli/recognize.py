@@ -7,8 +7,8 @@ import json
 from doodle.app.cli.options import each_file, input_options, library_options, segmenter_options, segmenter_params
 
 
-def add_parser(sub) -> None:
-    p = sub.add_parser("recognize", help="recognise actions in doodle or CSV files")
+def add_arguments(p) -> None:
+    """The arguments of ``doodle recognize``."""
     p.add_argument("files", nargs="+", metavar="FILE")
     input_options(p)
     library_options(p)

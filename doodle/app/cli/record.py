@@ -20,8 +20,8 @@ DEMO = [("T_STILL", 0.8, None), ("T_X", 1.2, 0.12), ("T_STILL", 0.5, None), ("T_
         ("T_Y", 0.3, 0.06), ("T_N_Y", 0.25, 0.06), ("T_STILL", 0.8, None)]
 
 
-def add_parser(sub) -> None:
-    p = sub.add_parser("record", help="record a doodle from the controllers (SteamVR), showing actions live")
+def add_arguments(p) -> None:
+    """The arguments of ``doodle record``."""
     p.add_argument("-o", "--output", required=True, metavar="FILE.doodle")
     p.add_argument("--source", choices=["openvr", "synthetic"], default="openvr",
                    help="openvr: SteamVR controllers and trackers (default); synthetic: a built-in performance")

@@ -18,8 +18,8 @@ SHEET_FRAMES = 8
 SHEET_COLUMNS = 4
 
 
-def add_parser(sub) -> None:
-    p = sub.add_parser("render", help="render the compiled animation in 3D: key-frame sheet (.png), .gif or .mp4")
+def add_arguments(p) -> None:
+    """The arguments of ``doodle render``."""
     p.add_argument("file", metavar="FILE")
     p.add_argument("-o", "--output", required=True, metavar="OUT.png|gif|mp4")
     p.add_argument("--overwrite", action="store_true", help="replace OUT if it exists")

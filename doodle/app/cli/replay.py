@@ -7,10 +7,10 @@ import sys
 from doodle.core.errors import DoodleError
 
 
-def add_parser(sub) -> None:
+def add_arguments(p) -> None:
+    """The arguments of ``doodle replay``."""
     from doodle.app.cli.options import input_options, segmenter_options
 
-    p = sub.add_parser("replay", help="stream a recorded doodle through the live recogniser, printing actions")
     p.add_argument("file")
     p.add_argument("--speed", type=float, default=1.0, help="1 real time (default), 2 twice as fast, 0 flat out")
     p.add_argument("--library", metavar="DIR", help="a user library (folder with library.toml)")

@@ -5,8 +5,8 @@ from __future__ import annotations
 from doodle.core.errors import DoodleError
 
 
-def add_parser(sub) -> None:
-    p = sub.add_parser("stylize", help="apply Laban Time and Weight to a BVH clip")
+def add_arguments(p) -> None:
+    """The arguments of ``doodle stylize``."""
     p.add_argument("clip", metavar="CLIP.bvh")
     p.add_argument("--time", type=float, default=0.0, help="L_t in [-1, 1]: sustained < 0 < sudden")
     p.add_argument("--weight", type=float, default=0.0, help="L_w in [-1, 1]: light < 0 < strong")
