@@ -748,15 +748,8 @@ def _on_grid(value: float) -> float:
     return round(round(value / STYLE_STEP) * STYLE_STEP, 6) + 0.0
 
 
-def effort_quality(model, track, start: int, end: int):
-    """The Effort recognised in samples [start, end] of a track (laban, §4.4)."""
-    from laban.classify import quality as laban_quality
-
-    return laban_quality(model, *_piece(track, start, end))
-
-
 def track_efforts(model, track, segments, given) -> list:
-    """Per segment of a track, the Effort ``model`` recognises in it (:func:`effort_quality`),
+    """Per segment of a track, the Effort ``model`` recognises in it (laban, §4.4),
     all scored together — None without a model, where a quality is ``given`` and for an
     ``unknown`` action."""
     asked = [k for k, (seg, quality) in enumerate(zip(segments, given))
@@ -765,13 +758,13 @@ def track_efforts(model, track, segments, given) -> list:
     if asked:
         from laban.classify import qualities as laban_qualities
 
-        pieces = [_piece(track, segments[k].start, segments[k].end) for k in asked]
+        pieces = [samples_of(track, segments[k].start, segments[k].end) for k in asked]
         for k, effort in zip(asked, laban_qualities(model, pieces)):
             efforts[k] = effort
     return efforts
 
 
-def _piece(track, start: int, end: int) -> tuple:
+def samples_of(track, start: int, end: int) -> tuple:
     """``(t, p, q)`` of samples [start, end] of a track."""
     seg = slice(start, min(end + 1, len(track.t)))
     return track.t[seg], track.p[seg], track.q[seg]

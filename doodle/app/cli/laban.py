@@ -247,7 +247,8 @@ def _proxy(args, model) -> dict:
 def cmd_classify(args) -> int:
     from laban.models import load as load_model
     from doodle.input.loader import load
-    from doodle.app.pipeline import effort_quality
+    from doodle.app.pipeline import samples_of
+    from laban.classify import qualities
     from grammar.recognizer import load_actions, recognize
     from doodle.input.repair import repaired
     from doodle.input.segmenter import SegmenterParams
@@ -269,8 +270,8 @@ def cmd_classify(args) -> int:
             else:
                 _, segs = recognize(doodle, compiled, SegmenterParams())[tr.name]
                 spans = [(s.action, s.start, s.end) for s in segs if s.action != "unknown"]
-            for action, a, b in spans:
-                e = effort_quality(model, tr, a, b)
+            efforts = qualities(model, [samples_of(tr, a, b) for _, a, b in spans])  # scored together
+            for (action, a, b), e in zip(spans, efforts):
                 rows.append({"track": tr.name, "action": action, "start": round(float(tr.t[a]), 3),
                              "end": round(float(tr.t[min(b, len(tr.t) - 1)]), 3), "time": e.time, "weight": e.weight,
                              "p_sudden": round(e.p_sudden, 3), "p_strong": round(e.p_strong, 3),
