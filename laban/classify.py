@@ -54,10 +54,16 @@ def drive_posterior(model: EffortModel, t: np.ndarray, p: np.ndarray, q: np.ndar
     return drive_posteriors(model, [(t, p, q)])[0]
 
 
+SCORED_AT_ONCE = 64  # segments whose feature sequences are made and scored together (a long doodle's
+# thousands never all held at once)
+
+
 def drive_posteriors(model: EffortModel, pieces: list) -> np.ndarray:
-    """(n, 8) posteriors over ``model.drives.labels`` of segments ``(t, p, q)``, scored together."""
-    seqs = np.stack([sequence(t, p, q, model.sets, model.points) for t, p, q in pieces])
-    ll = model.drives.log_likelihoods_many(seqs) / model.temperature
+    """(n, 8) posteriors over ``model.drives.labels`` of segments ``(t, p, q)``, scored
+    together, :data:`SCORED_AT_ONCE` at a time."""
+    ll = np.concatenate([model.drives.log_likelihoods_many(
+        np.stack([sequence(t, p, q, model.sets, model.points) for t, p, q in pieces[a:a + SCORED_AT_ONCE]]))
+        for a in range(0, len(pieces), SCORED_AT_ONCE)]) / model.temperature
     w = np.exp(ll - ll.max(axis=1, keepdims=True))
     return w / w.sum(axis=1, keepdims=True)
 
