@@ -185,7 +185,8 @@ def _shortest(cost: float, longest: float, limit: float) -> float:
 
 def _unlike(reads: np.ndarray) -> list[int]:
     """Per state, the codes (a bit set) whose step from it differs from the step most codes
-    take (``reads`` (codes, q, q): an action's step per code; a tie goes to the lowest code)."""
+    take (``reads`` (codes, q, q): an action's step per code; of steps as common, the
+    cheapest — lexicographically least — so the states of a block agree on it)."""
     k, q = reads.shape[:2]
     steps = np.ascontiguousarray(reads.transpose(1, 0, 2)).view(np.dtype((np.void, 8 * q))).reshape(q, k)
     out = []
@@ -193,7 +194,8 @@ def _unlike(reads: np.ndarray) -> list[int]:
         count: dict[bytes, int] = {}
         for step in row:
             count[step] = count.get(step, 0) + 1
-        most = max(count, key=count.get)
+        top = max(count.values())
+        most = min((s for s, n in count.items() if n == top), key=lambda s: np.frombuffer(s).tolist())
         out.append(sum(1 << c for c, step in enumerate(row) if step != most))
     return out
 
