@@ -267,11 +267,12 @@ def choose(seg, track, actions: Actions, skeleton, rest, given, effort, style: s
     none): the first that travels the way the action means (a side step sideways, relative
     to its facing; :func:`retarget.clips.fits`) — the library's own before a retargeted
     built-in one — stylised by the quality ``given`` or, without one, the ``effort`` the
-    effort model recognised in the hand's motion (:func:`track_efforts`; a cycle is never
-    retimed: its pace is the hand's travel; a jump's timing is left as it is — its flight
-    lasts what gravity gives it — and it takes the quality in its poses). ``styled``: stylised clips already made, by
-    clip and quality (filled here; segments asking for the same share one — a long doodle
-    asks for the same few again and again, and clips are never changed in place)."""
+    effort model recognised in the hand's motion (:func:`track_efforts`), on the
+    :data:`STYLE_STEP` grid (a cycle is never retimed: its pace is the hand's travel; a
+    jump's timing is left as it is — its flight lasts what gravity gives it — and it takes
+    the quality in its poses). ``styled``: stylised clips already made, by clip and quality
+    (filled here; segments asking for the same share one — a long doodle asks for the same
+    few again and again, and clips are never changed in place)."""
     from retarget.clips import fits
 
     library = actions.library
