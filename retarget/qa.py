@@ -8,7 +8,11 @@ Each measure names the frames it happens in, so a failure can be looked at:
   its heel or toes is not sliding) between two frames it is flat in, flat for at least
   :attr:`Limits.stance` (a swinging foot skimming the floor is not standing on it); reported
   as frames per second of motion;
-* **pops** — any joint or end site moving faster than :attr:`Limits.pop` between two frames;
+* **pops** — any joint or end site moving faster than :attr:`Limits.pop` between two frames,
+  or the pelvis rising faster than :attr:`Limits.rise` while both soles are on the ground
+  (within :attr:`Limits.hover`) and stay there for :attr:`Limits.push` (not a take-off): a body
+  jerked up out of a crouch — real motion capture rises at most 1.7 m/s so (a roll; a jump's
+  landing recovery under 1 m/s);
 * **one-frame turns** — the pelvis's heading changing by more than :attr:`Limits.turn` in one
   frame while the frames either side turn less than a third of that (a turn that is not
   eased);
@@ -54,6 +58,8 @@ class Limits:
     held: float = 0.5  # s: ... and one held still above the ground longer than this stands in the air
     slides_per_s: float = 0.3  # sliding frames per second the check allows
     pop: float = 15.0  # m/s: no joint of a person moves faster
+    rise: float = 2.5  # m/s: the pelvis rises no faster with both soles on the ground (mocap: ≤ 1.7) …
+    push: float = 0.3  # s: … unless they leave it within this (a jump's push-off rises at ~2.8 m/s)
     turn: float = 6.0  # degrees of heading in one frame (real walks turn ≤ 6.4° a frame), the frames around it
     # turning under a third of that: a step, not a turn
     hover: float = 0.02  # m: soles above the ground ...
@@ -220,9 +226,11 @@ def check(motion: Motion, terrain=None, limits: Limits = Limits(), ground: float
     standing = np.zeros(motion.frames, dtype=bool)  # a foot standing still above the ground
     lowest = np.full(motion.frames, np.inf)
     sole_heights = []
+    grounded = np.ones(motion.frames, dtype=bool)  # both soles on the ground
     for points, sole in zip(feet_points, soles):
         sole_h = height(sole).min(axis=1) - standing_sole
         sole_heights.append(sole_h)
+        grounded &= sole_h <= limits.hover
         # flat: every point of the foot — ankle, toes, tips — as low as when the character stands
         # on it (its 10th percentile over the motion), so whatever the skeleton puts where
         flat, step = _flat_moves(height(points), points, dt, limits)
@@ -242,6 +250,11 @@ def check(motion: Motion, terrain=None, limits: Limits = Limits(), ground: float
                               for a in blocks if a + 1 < motion.frames]) / dt
               if motion.frames > 1 else np.zeros(0))
     pops = np.flatnonzero(speeds > limits.pop) + 1
+    if len(feet) == 2 and motion.frames > 1:  # jerked up out of a crouch, feet on the ground
+        rising = np.flatnonzero((np.diff(positions[:, pelvis, 1]) / dt > limits.rise) & grounded[1:] & grounded[:-1]) + 1
+        aloft = np.flatnonzero(lowest > limits.hover)  # both soles off the ground
+        take_off = aloft[np.minimum(np.searchsorted(aloft, rising), len(aloft) - 1)] if len(aloft) else rising - 1
+        pops = np.union1d(pops, rising[(take_off < rising) | (take_off - rising > limits.push / dt)])
     hovering = standing.copy()
     if soles:
         for a, b in _runs(lowest > limits.hover):

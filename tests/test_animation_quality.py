@@ -174,3 +174,22 @@ def test_strides_lengthen_with_speed_within_range():
     assert stride_scale(walk.motion, walk.roles["pelvis"], 1.69 * natural) == pytest.approx(1.3)
     assert stride_scale(walk.motion, walk.roles["pelvis"], 10 * natural) == pytest.approx(STRIDE_RANGE)
     assert stride_scale(walk.motion, walk.roles["pelvis"], 0.01 * natural) == pytest.approx(1 / STRIDE_RANGE)
+
+
+def test_a_body_jerked_up_from_its_landing_crouch_is_a_pop_and_a_take_off_is_not():
+    """The jump clip at its own pace passes the check (its push-off rises fast, but the feet
+    leave the ground); the same clip with its landing recovery (crouch to standing, 15
+    frames) played in two frames fails it, though no joint comes near the speed limit."""
+    from retarget.qa import check
+    from retarget.skeleton import Motion, forward_kinematics
+
+    jump = _clip("Jump").motion
+    own = check(jump, ground=0.0)
+    assert own.passes, own.summary()
+    y = forward_kinematics(jump)[0][:, 0, 1]
+    crouch = 40 + int(np.argmin(y[40:]))  # the landing's deepest frame
+    keep = list(range(crouch + 1)) + [crouch + (jump.frames - 1 - crouch) // 2, jump.frames - 1]
+    popped = Motion(jump.skeleton, jump.translations[keep], jump.rotations[keep], jump.frame_time)
+    c = check(popped, ground=0.0)
+    assert c.fastest < c.limits.pop  # no joint too fast …
+    assert not c.passes and c.pops and min(c.pops) > crouch  # … yet the stand-up is a pop
