@@ -234,11 +234,8 @@ def _estep(X, start, A, means, variances):
     normalised by its own maximum per step and every posterior is normalised per step —
     so nothing overflows, whatever the scales."""
     n, T, d = X.shape
-    inv = 1.0 / variances
     flat = np.ascontiguousarray(X.transpose(1, 0, 2)).reshape(T * n, d)  # time-major: each step contiguous
-    log_b = -0.5 * ((flat * flat) @ inv.T - 2.0 * flat @ (means * inv).T
-                    + np.sum(np.log(2 * np.pi * variances) + means**2 * inv, axis=1))
-    log_b = log_b.reshape(T, n, -1)
+    log_b = _Densities(means[None], variances[None])(flat.reshape(T, n, d))[:, :, 0]  # (T, n, S)
     top = log_b.max(axis=2, keepdims=True)
     b = np.maximum(np.exp(log_b - top), 1e-300)
     alpha = np.empty_like(b)

@@ -25,11 +25,9 @@ def unit(q) -> np.ndarray:
     """``q`` (..., 4) as float, normalised as scipy's ``Rotation.from_quat`` does it (the
     same arithmetic); a zero quaternion is a ValueError, as there."""
     q = np.asarray(q, dtype=float)
-    x, y, z, w = q[..., 0], q[..., 1], q[..., 2], q[..., 3]
-    norm = np.sqrt(x * x + y * y + z * z + w * w)
-    if (norm == 0).any():
+    if not q.any(axis=-1).all():
         raise ValueError("Found zero norm quaternions in `quat`.")
-    return q / norm[..., None]
+    return normalise(q)
 
 
 def hemisphere_signs(q: np.ndarray) -> np.ndarray:
