@@ -20,6 +20,7 @@ from __future__ import annotations
 
 from collections import deque
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
@@ -40,13 +41,33 @@ class DFA:
     def size(self) -> int:
         return len(self.accept)
 
+    @cached_property
+    def _lists(self) -> tuple[list, list]:
+        """The table and accept mask as Python lists (a step is a list look-up, not numpy
+        indexing: the Matcher asks :meth:`accepts` and :meth:`accepting_prefixes` per segment)."""
+        return self.table.tolist(), self.accept.tolist()
+
     def accepts(self, codes) -> bool:
+        table, accept = self._lists
         state = 0
         for c in codes:
-            state = int(self.table[state, c])
+            state = table[state][c]
             if state < 0:
                 return False
-        return bool(self.accept[state])
+        return accept[state]
+
+    def accepting_prefixes(self, codes) -> list[int]:
+        """The lengths ``k`` (``0 ≤ k ≤ len(codes)``) of the prefixes ``codes[:k]`` it
+        accepts, in increasing order (one pass)."""
+        table, accept = self._lists
+        state, out = 0, [0] if accept[0] else []
+        for k, c in enumerate(codes, 1):
+            state = table[state][c]
+            if state < 0:
+                break
+            if accept[state]:
+                out.append(k)
+        return out
 
 
 # --- Thompson's construction -------------------------------------------------------------

@@ -363,14 +363,19 @@ class Matcher:
             return self._tokens[j - 1].end - self._tokens[i].start
 
         lo, hi, head, tail = 0, len(codes), [], []
-        for k in range(hi - 1, 0, -1):  # the longest leading walk
-            w = walk(codes[:k])
-            if w is not None and auto.dfas[action].accepts(codes[k:]):
-                head, lo = [(s, s + k, w)], k
+        prefixes: dict[int, list[int]] = {}  # length -> the walks accepting that many leading tokens
+        for a in walks:
+            for k in auto.dfas[a].accepting_prefixes(codes[:hi - 1]):
+                prefixes.setdefault(k, []).append(a)
+        for k in sorted((k for k in prefixes if k > 0), reverse=True):  # the longest leading walk
+            if auto.dfas[action].accepts(codes[k:]):
+                head, lo = [(s, s + k, auto.most_specific(np.array(prefixes[k], dtype=np.int64)))], k
                 break
         for k in range(lo + 1, hi):  # the longest trailing walk that outlasts the rest
+            if samples(s + k, p) <= samples(s + lo, s + k):
+                break  # the rest only grows and the walk only shrinks from here
             w = walk(codes[k:])
-            if w is not None and auto.dfas[action].accepts(codes[lo:k]) and samples(s + k, p) > samples(s + lo, s + k):
+            if w is not None and auto.dfas[action].accepts(codes[lo:k]):
                 tail, hi = [(s + k, p, w)], k
                 break
         if head or tail:
