@@ -392,16 +392,15 @@ def reject_distances(group: Group, members: list) -> np.ndarray:
     straddles = []
     for i, j in pairs:
         (pa, qa), (pb, qb) = pieces[i], pieces[j]
-        if True:
-            poses = []
-            for t in range(len(pa)):
-                join = pa[t, -1] - pa[t, half]  # b's first half moved on from where a's second half ends
-                p = np.concatenate([pa[t, half:] - pa[t, half], pb[t, :half + 1] - pb[t, 0] + join])
-                q = (np.concatenate([qa[t, half:], qb[t, :half + 1]]) if qa is not None
-                     else np.tile([0.0, 0.0, 0.0, 1.0], (len(p), 1)))
-                poses.append((p, q))
-            paths, quats = sample(poses)
-            straddles.append(features(paths, quats if qa is not None else None, group.turn))
+        poses = []
+        for t in range(len(pa)):
+            join = pa[t, -1] - pa[t, half]  # b's first half moved on from where a's second half ends
+            p = np.concatenate([pa[t, half:] - pa[t, half], pb[t, :half + 1] - pb[t, 0] + join])
+            q = (np.concatenate([qa[t, half:], qb[t, :half + 1]]) if qa is not None
+                 else np.tile([0.0, 0.0, 0.0, 1.0], (len(p), 1)))
+            poses.append((p, q))
+        paths, quats = sample(poses)
+        straddles.append(features(paths, quats if qa is not None else None, group.turn))
     near = _nearest(group, np.array(straddles)).min(axis=0) if straddles else None
     out = []
     for slot, (k, feats, _, _) in enumerate(members):
