@@ -87,6 +87,7 @@ class Blocks:
         self.action: list[int] = []
         self.shortest: list[float] = []
         self._tables: list[list] = [[None] * N_CODES for _ in auto.names]  # per action and code: _moves
+        self._sets: list[dict] = [{} for _ in auto.names]  # per action and set of states: _set
         self._limit = [float(x) for x in auto.limits]
         self.special: list[int] = []  # per block: the codes its states do not all read alike (a bit set)
         self.common: list[int] = []  # ... and a code they all read alike (-1: none)
@@ -129,6 +130,18 @@ class Blocks:
         h = self.next[g][code] = self._intern(a, tuple(levels))
         return h
 
+    def _set(self, a: int, states: int) -> tuple[list[int], int, float]:
+        """A set of action ``a``'s states (a bit set) listed, the codes some of them read
+        unlike most (a bit set) and the longest way to acceptance from any of them (worked
+        out once per set: the same sets recur in many blocks)."""
+        unlike, longest, special, most = self._unlike[a], self._longest[a], 0, -INF
+        listed = _states(states)
+        for p in listed:
+            special |= unlike[p]
+            most = max(most, longest[p])
+        out = self._sets[a][states] = (listed, special, most)
+        return out
+
     def _moves(self, a: int, code: int) -> list:
         """Action ``a``'s step on ``code`` as bit sets: per state, ``((cost, states), …)``
         reached by reading ``code`` (the Automaton's composed read-then-insert step, within
@@ -147,15 +160,16 @@ class Blocks:
         g = self._index[a].get(levels)
         if g is not None:
             return g
-        longest, unlike, limit = self._longest[a], self._unlike[a], self._limit[a]
+        limit, sets = self._limit[a], self._sets[a]
         bound, special = INF, 0  # the block's shortest (see the module); the codes its states read unlike most
-        members = tuple((cost, _states(states)) for cost, states in levels)
-        for cost, states in members:
-            most = -INF
-            for p in states:
-                special |= unlike[p]
-                most = max(most, longest[p])
+        members = []
+        for cost, states in levels:
+            found = sets.get(states)
+            listed, unlike, most = self._set(a, states) if found is None else found
+            members.append((cost, listed))
+            special |= unlike
             bound = min(bound, _shortest(cost, most, limit))
+        members = tuple(members)
         accept = next((cost for cost, states in levels if states & self._accepting[a]), INF)
         if bound == INF and accept == INF:  # nothing now, nothing later
             self._index[a][levels] = NONE
