@@ -446,9 +446,11 @@ class Refiner:
     unknown run's are (two gestures or one); failing that, it is unknown. A window may also take back up to
     :data:`UNKNOWN_REACH` tokens of the unknown run before it, or reach as far into the
     unknown run after it. Tokens a window takes from the next segment are taken from it;
-    tokens it gives up are unknown. An unknown run of :data:`SPOT_TOKENS` to
-    :data:`SPOT_MAX` tokens is searched the same way and reported as a learned action when
-    one fits within :data:`SPOT` of its rejection distance. Other segments pass through
+    tokens it gives up are unknown. An unknown run of :data:`SPOT_TOKENS` tokens or more
+    is searched the same way — one longer than :data:`SPOT_MAX` a part at a time, each
+    ending at a pause — and every learned action that fits within :data:`SPOT` of its
+    rejection distance is reported, the best first, then the rest of the run on either side
+    searched again (:meth:`_spots`). Other segments pass through
     (less any tokens taken). A shaped segment is decided once the pause ending its motion
     is known (or :data:`SPOT_MAX` tokens have passed without one). An unknown run whose
     motion goes on, without a pause, into a shaped segment is not searched: it waits, and
@@ -523,11 +525,11 @@ class Refiner:
             return []
         continues = (after is not None and after.action in self.shapes.names and seg.stop < len(self.tokens)
                      and self.tokens[seg.stop].name != "T_STILL")  # into a shaped segment, no pause between
-        if seg.action == UNKNOWN and SPOT_TOKENS <= seg.stop - first <= SPOT_MAX:
+        if seg.action == UNKNOWN and seg.stop - first >= SPOT_TOKENS:
             if continues:  # left pending: the next segment may take it back, the rest is searched then
                 self._deferred = True
                 return self._emit(UNKNOWN, first, seg.stop, False, None)
-            best = self._spot(first, seg.stop, known)
+            found = self._spots(first, seg.stop, known)
         elif seg.action in self.shapes.names:
             pending = self._unknown is not None and self._unknown.stop == first
             lowest = self._unknown.first if pending else first  # it may take back tokens of an unknown run
@@ -547,20 +549,54 @@ class Refiner:
             if two is not None:  # the motion is two gestures back to back
                 return self._both(two, first, seg.stop, known)
             best = self._best(starts, ends, known, motion=motion)
+            found = [best] if best is not None else []
             if best is None and SPOT_TOKENS <= seg.stop - first <= SPOT_MAX:  # none fits around it: searched within
                 two = self._two((first, seg.stop), known, whole=False)
                 if two is not None:
                     return self._both(two, first, seg.stop, known)
-                best = self._spot(first, seg.stop, known)
+                found = self._spots(first, seg.stop, known)
         else:
             return self._emit(seg.action, first, seg.stop, seg.exact, seg.distance)
-        if best is None:
+        if not found:
             return self._spot_deferred(first, known) + self._emit(UNKNOWN, first, seg.stop, False, None)
-        f, e, k, edits = best
+        f = found[0][0]
         if f < first:
             self._take_back(f)
         return (self._spot_deferred(min(f, first), known) + self._emit(UNKNOWN, first, f, False, None)
-                + self._emit(self.shapes.names[k], f, e, edits == 0.0, edits) + self._emit(UNKNOWN, e, seg.stop, False, None))
+                + self._emit_found(found, seg.stop))
+
+    def _emit_found(self, found: list, stop: int) -> list:
+        """Learned actions found in order ``[(first, stop, action, edits), …]`` emitted, the
+        tokens between them and after the last (up to ``stop``) unknown."""
+        from grammar.matcher import UNKNOWN
+
+        out, last = [], found[0][0]
+        for f, e, k, edits in found:
+            out += self._emit(UNKNOWN, last, f, False, None)
+            out += self._emit(self.shapes.names[k], f, e, edits == 0.0, edits)
+            last = e
+        return out + self._emit(UNKNOWN, last, stop, False, None)
+
+    def _spots(self, a: int, b: int, known: int) -> list:
+        """Every learned action tokens a..b of an unknown run hold, in order: the one
+        :meth:`_spot` finds, then the same search in what it leaves on either side (at least
+        :data:`SPOT_TOKENS` tokens) — a run may hold two gestures a pause apart, where a
+        performer went on without the pause the Matcher needed (back to back). A run longer
+        than :data:`SPOT_MAX` tokens is searched a part at a time, each part ending at its
+        last pause within that many tokens (or at that many, without one)."""
+        if b - a > SPOT_MAX:  # a long run: a part at a time, each as long as it may be and ending at a pause
+            out = []
+            while b - a > SPOT_MAX:
+                cut = max((i for i in range(a + SPOT_TOKENS, a + SPOT_MAX + 1) if self.tokens[i].name == "T_STILL"),
+                          default=a + SPOT_MAX)
+                out, a = out + self._spots(a, cut, known), cut
+            return out + (self._spots(a, b, known) if b - a >= SPOT_TOKENS else [])
+        best = self._spot(a, b, known)
+        if best is None:
+            return []
+        f, e = best[0], best[1]
+        before = self._spots(a, f, known) if f - a >= SPOT_TOKENS else []
+        return before + [best] + (self._spots(e, b, known) if b - e >= SPOT_TOKENS else [])
 
     def _spot(self, a: int, b: int, known: int):
         """The learned action that tokens a..b of an unknown run hold, as :meth:`_best` finds it
@@ -579,15 +615,13 @@ class Refiner:
         from grammar.matcher import UNKNOWN
 
         pending, deferred, self._deferred = self._unknown, self._deferred, False
-        if pending is None or not deferred or not SPOT_TOKENS <= pending.stop - pending.first <= SPOT_MAX:
+        if pending is None or not deferred or pending.stop - pending.first < SPOT_TOKENS:
             return []
-        best = self._spot(pending.first, pending.stop, known)
-        if best is None:
+        found = self._spots(pending.first, pending.stop, known)
+        if not found:
             return []
-        f, e, k, edits = best
-        self._take_back(f)
-        out = self._emit(self.shapes.names[k], f, e, edits == 0.0, edits)
-        out += self._emit(UNKNOWN, e, pending.stop, False, None)
+        self._take_back(found[0][0])
+        out = self._emit_found(found, pending.stop)
         self._done = done
         return out
 

@@ -255,3 +255,30 @@ def test_streaming_refiner_equals_batch_across_gestures(tmp_path, idle):
                       for name, (_, segs) in batch.items() for s in segs if s.action != "unknown")
     assert sorted((r.track, r.action, r.start) for r in found) == expected
     assert len(expected) >= len(spans) - 2
+
+
+def test_gestures_back_to_back_in_a_long_unknown_run_are_all_found(tmp_path):
+    """Sub_U002's punches and combos performed back to back with both hands, learned from
+    ex_2..4 of every gesture: the Matcher leaves most of the stream to the Refiner as one
+    unknown run longer than SPOT_MAX tokens, the gestures a short pause apart. It is
+    searched a part at a time and, around each gesture found, for more: all four are read,
+    in order (an unknown run once gave one action at most, and none past SPOT_MAX tokens),
+    and live equals batch."""
+    from bench.learning_protocol import load as load_vive, make_library, stream
+    from doodle.app.replay import replay
+    from grammar.recognizer import load_actions, recognize
+
+    if not VIVE.is_dir():
+        pytest.skip("real Vive recordings not found")
+    data = load_vive(VIVE)
+    user = data["Sub_U002"]
+    lib = make_library(tmp_path / "mine", {g: user[g][2:5] for g in sorted(user)}, ("c0", "c1"))
+    compiled = load_actions(lib, False)
+    pieces = [(g, user[g][k]) for g, k in (("left_right_left_combo", 0), ("right_left_right_combo", 0),
+                                           ("uppercut_left", 1), ("uppercut_right", 0))]
+    doodle, spans = stream(pieces, np.random.default_rng(0), False)
+    batch = recognize(doodle, compiled)
+    assert [s.action for s in batch["c0"][1] if s.action != "unknown"] == [g for g, _, _ in spans]
+    expected = sorted((name, s.action, float(doodle.track(name).t[s.start]))
+                      for name, (_, segs) in batch.items() for s in segs if s.action != "unknown")
+    assert sorted((r.track, r.action, r.start) for r in replay(doodle, compiled).found) == expected
