@@ -442,7 +442,8 @@ class Refiner:
     a window itself; a window pays for the motion's path length it leaves out as if that
     were at the action's rejection distance (:meth:`_best`). The best window wins — unless
     two learned actions fit the motion's two parts better than one fits it (:meth:`_two`):
-    then both are read, back to back. With none, the segment's own tokens are searched as an
+    then both are read, back to back (with no pause within :data:`SPOT_MAX` tokens, the
+    segment's own tokens are tried so). With none, the segment's own tokens are searched as an
     unknown run's are (two gestures or one); failing that, it is unknown. A window may also take back up to
     :data:`UNKNOWN_REACH` tokens of the unknown run before it, or reach as far into the
     unknown run after it. Tokens a window takes from the next segment are taken from it;
@@ -545,8 +546,9 @@ class Refiner:
             if motion is not None:  # the whole motion between pauses is a window too, and no window leaves it
                 starts = sorted({f for f in starts if f >= motion[0]} | {motion[0]})
                 ends = [(lo, min(hi, motion[1])) for lo, hi in ends if lo <= motion[1]] + [(motion[1], motion[1])]
-            two = self._two(motion, known) if motion is not None else None
-            if two is not None:  # the motion is two gestures back to back
+            # the motion (or, with no pause near, the segment itself) is two gestures back to back
+            two = self._two(motion if motion is not None else (first, seg.stop), known)
+            if two is not None:
                 return self._both(two, first, seg.stop, known)
             best = self._best(starts, ends, known, motion=motion)
             found = [best] if best is not None else []
