@@ -282,3 +282,21 @@ def test_gestures_back_to_back_in_a_long_unknown_run_are_all_found(tmp_path):
     expected = sorted((name, s.action, float(doodle.track(name).t[s.start]))
                       for name, (_, segs) in batch.items() for s in segs if s.action != "unknown")
     assert sorted((r.track, r.action, r.start) for r in replay(doodle, compiled).found) == expected
+
+
+def test_a_segment_with_no_pause_near_is_tried_as_two_gestures(tmp_path):
+    """Sub_U005's golf swing, uppercut and combo back to back with both hands: the Matcher
+    gives the golf swing a segment that runs on into the uppercut with no pause within
+    SPOT_MAX tokens, so there is no motion between pauses to split. The segment's own
+    tokens are tried as two gestures back to back, and the uppercut is read (it was lost)."""
+    from bench.learning_protocol import load as load_vive, make_library, stream
+    from grammar.recognizer import load_actions, recognize
+
+    if not VIVE.is_dir():
+        pytest.skip("real Vive recordings not found")
+    user = load_vive(VIVE)["Sub_U005"]
+    lib = make_library(tmp_path / "mine", {g: user[g][:3] for g in sorted(user)}, ("c0", "c1"))
+    pieces = [(g, user[g][k]) for g, k in (("golf_swing", 4), ("uppercut_right", 4), ("left_right_left_combo", 3))]
+    doodle, spans = stream(pieces, np.random.default_rng(1), False)
+    named = [s.action for s in recognize(doodle, load_actions(lib, False))["c0"][1] if s.action != "unknown"]
+    assert named == [g for g, _, _ in spans]
