@@ -126,6 +126,21 @@ def test_a_running_scheduler_compiles_the_same(batch_run, tmp_path, capsys, monk
         assert (tmp_path / p.stem / "c0.bvh").read_bytes() == batch_files[p.stem]["c0.bvh"]
 
 
+def _loaded(file, out, options):
+    return int("doodle.app.pipeline" in sys.modules), 0
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="workers are forked on Linux only")
+def test_local_workers_start_with_what_this_process_loaded():
+    """On Linux the local workers are forked from the command's process, which imports the
+    compile before the cluster starts (import_compile_modules): they do not import it again."""
+    from doodle.app.cli.compile import import_compile_modules
+
+    import_compile_modules()
+    rows = batch.run([batch.Job("x.doodle", Path("out/x"))], _loaded, None, 1)
+    assert (rows[0].status, rows[0].tracks) == ("ok", 1)
+
+
 # --- planned before any work ----------------------------------------------------------------
 
 def test_a_folder_means_its_doodle_and_csv_files(tmp_path):

@@ -168,11 +168,22 @@ def _quiet_dask() -> Iterator[None]:
             lg.setLevel(level)
 
 
+def start_method() -> str:
+    """How local workers are started: forked on Linux, so that each begins with the modules
+    this process has imported (the compile's own, imported before the cluster starts: about
+    a second less per batch on 2 cores than spawning workers that import Dask and the compile
+    again); the platform's default elsewhere (spawn on macOS and Windows, where fork is
+    unsafe or missing). The workers run only single-threaded compile code."""
+    import multiprocessing
+
+    return "fork" if sys.platform.startswith("linux") else multiprocessing.get_start_method()
+
+
 @contextlib.contextmanager
 def client_for(workers: int, scheduler: str | None):
     """A Dask client: of the running ``scheduler``, or of a local cluster of ``workers``
-    processes of one thread each (numpy and Python code: processes, not threads), with no
-    dashboard and no log lines."""
+    processes of one thread each (numpy and Python code: processes, not threads; started as
+    :func:`start_method` says), with no dashboard and no log lines."""
     import logging
 
     from dask.distributed import Client, LocalCluster
@@ -186,8 +197,11 @@ def client_for(workers: int, scheduler: str | None):
             with client:
                 yield client
             return
-        with LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None,
-                          silence_logs=logging.CRITICAL) as cluster, Client(cluster) as client:
+        import dask
+
+        with dask.config.set({"distributed.worker.multiprocessing-method": start_method()}), \
+                LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None,
+                             silence_logs=logging.CRITICAL) as cluster, Client(cluster) as client:
             yield client
 
 

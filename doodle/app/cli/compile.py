@@ -178,6 +178,19 @@ def check_batch_options(args) -> None:
     library_of(args)
 
 
+def import_compile_modules() -> None:
+    """The modules a compile runs, imported before a local cluster starts: its workers are
+    forked from this process (:func:`doodle.app.batch.start_method`) and begin with them, rather
+    than each importing them for its first file."""
+    import doodle.app.pipeline  # noqa: F401
+    import doodle.app.report  # noqa: F401
+    import laban.classify  # noqa: F401
+    import laban.models  # noqa: F401
+    import retarget.bvh  # noqa: F401
+    import retarget.qa  # noqa: F401
+    import retarget.stylize  # noqa: F401
+
+
 def cmd_compile_batch(args) -> int:
     from doodle.app import batch
     from doodle.app.cli.options import EXIT_BAD_INPUT
@@ -189,6 +202,8 @@ def cmd_compile_batch(args) -> int:
         raise DoodleError(f"--workers must be 1 or more, not {args.workers}")
     jobs = batch.plan(batch.expand_inputs(args.files), check_dir(args.output))
     check_batch_options(args)
+    if not args.scheduler:
+        import_compile_modules()
     options = batch.options_for_workers(args)
     rows = batch.run(jobs, compiled_counts, options, args.workers or batch.default_workers(), args.scheduler,
                      progress_bar("files"))
