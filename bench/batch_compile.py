@@ -24,7 +24,10 @@ machine's load average is printed before and after: other work on it takes cores
 both sides, and most from the parallel one. The batch's outputs are checked to be
 byte-identical to the one-by-one ones.
 
-Run: ``python -m bench.batch_compile [--runs N] [--files N]``.
+``--blocks 7`` compiles copies of a 60 s doodle instead (:func:`bench.long_doodles.make_doodle`),
+where the fixed costs weigh less.
+
+Run: ``python -m bench.batch_compile [--runs N] [--files N] [--blocks N]``.
 """
 
 from __future__ import annotations
@@ -51,12 +54,20 @@ WORKERS = 2
 TARGET = 1.8
 
 
-def make_inputs(folder: Path, n: int) -> list[Path]:
+def make_inputs(folder: Path, n: int, blocks: int = 0) -> tuple[list[Path], str]:
+    """``n`` copies of the demo, or with ``blocks`` of a longer doodle of that many 8.6 s
+    blocks (:func:`bench.long_doodles.make_doodle`: 7 make about a minute); and what they are."""
     folder.mkdir(parents=True, exist_ok=True)
+    source, what = DEMO, f"copies of {DEMO.relative_to(ROOT)}"
+    if blocks:
+        from bench.long_doodles import make_doodle
+
+        source, seconds = make_doodle(folder.parent / "long.doodle", blocks)
+        what = f"copies of a {seconds:.0f} s doodle (bench.long_doodles, {blocks} blocks)"
     files = [folder / f"take{i:02d}.doodle" for i in range(1, n + 1)]
     for f in files:
-        shutil.copy(DEMO, f)
-    return files
+        shutil.copy(source, f)
+    return files, what
 
 
 def one_by_one(folder: Path, out: Path, warm: bool) -> float:
@@ -171,6 +182,8 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(prog="python -m bench.batch_compile")
     ap.add_argument("--runs", type=int, default=3)
     ap.add_argument("--files", type=int, default=16)
+    ap.add_argument("--blocks", type=int, default=0,
+                    help="compile copies of a doodle of this many 8.6 s blocks instead of the demo (7: about 60 s)")
     ap.add_argument("--one-by-one", nargs=2, metavar=("FOLDER", "OUT"), help=argparse.SUPPRESS)
     ap.add_argument("--warm", action="store_true", help=argparse.SUPPRESS)
     args = ap.parse_args(argv)
@@ -178,13 +191,12 @@ def main(argv: list[str] | None = None) -> int:
         print(f"{one_by_one(Path(args.one_by_one[0]), Path(args.one_by_one[1]), args.warm):.6f}")
         return 0
 
-    print(f"Batch compile: {args.files} copies of {DEMO.relative_to(ROOT)}, one after another in one process vs "
-          f"a {WORKERS}-worker local Dask cluster (median of {args.runs}; {os.cpu_count()} CPUs, "
-          "OPENBLAS_NUM_THREADS=1)")
-    print(f"  before: {_load()}")
     with tempfile.TemporaryDirectory() as tmp:
         takes, out = Path(tmp) / "takes", Path(tmp) / "out"
-        make_inputs(takes, args.files)
+        _, what = make_inputs(takes, args.files, args.blocks)
+        print(f"Batch compile: {args.files} {what}, one after another in one process vs a {WORKERS}-worker local "
+              f"Dask cluster (median of {args.runs}; {os.cpu_count()} CPUs, OPENBLAS_NUM_THREADS=1)")
+        print(f"  before: {_load()}")
         serial, batch, same = end_to_end(takes, out, args.runs)
         warm_serial, warm_batch = steady_state(takes, out, args.runs)
     print(f"  after:  {_load()}")
