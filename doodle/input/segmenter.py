@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import copy
 import math
+from collections import deque
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -280,6 +281,7 @@ class Segmenter:
         self._tok_fast = self._run_fast = None  # (first, last) sample over 2ε: token before the run, the run
         self._since: list = []  # runs shorter than α since the last confirmed one (corner candidates)
         self._pause: tuple | None = None  # (start, samples classified from which it may be a pause) of the still :meth:`held` last read
+        self._recent: deque = deque(maxlen=self.alpha + 1)  # the latest samples pushed, as smoothed (:meth:`_slowing`)
 
     @property
     def pending(self) -> Token | None:
@@ -341,16 +343,16 @@ class Segmenter:
         return out + self._absorber.close()
 
     def held(self) -> list[Token]:
-        """The tokens not final yet, as they stand (provisional): what :meth:`cut` would
-        give were the stream to end now, worked out on a copy. A still in progress is read
-        through the samples still being smoothed (smoothed as at the end of a file) and left
+        """The tokens not final yet, as they stand (provisional): what :meth:`close` would
+        give were the stream to end now, worked out on a copy — the samples still being
+        smoothed read as at the end of a file, so that a hand come to rest is read still
+        without waiting for the smoothing kernel's half-width. A still in progress is left
         out while it could not be a pause yet — were a movement to begin now, by the
         Absorber's rule (:meth:`Absorber.pause_from`): it may be a hold, the movement before
         it going on."""
         peek, out = self._fork(), []
-        if self._cur == STILL:
-            for row in peek._smoother.close():
-                peek._classify(row, out)
+        for row in peek._smoother.close():
+            peek._classify(row, out)
         if peek._cur == STILL:
             pause = peek._absorber.pause_from(Token(NAMES[STILL], peek._cur_start, peek._n))
             self._pause = (self._cur_start, pause - (peek._n - self._n))  # ... once this many samples are classified
@@ -361,21 +363,34 @@ class Segmenter:
     def held_key(self) -> tuple:
         """What :meth:`held` depends on, cheaply (for every frame): the token in progress and
         where it starts; for a movement, whether it has covered the floor under which it
-        is absorbed; for a still, whether it may be a pause by now (as :meth:`held` last
-        found)."""
+        is absorbed, and while the hand moves slowly (:meth:`_slowing`) the samples pushed,
+        since the ones still being smoothed may end in a still by now; for a still, whether
+        it may be a pause by now (as :meth:`held` last found) — or, while :meth:`held` has
+        not read it as a still yet (the samples still being smoothed end in a movement),
+        the samples classified, since each may change that."""
         if self._cur is None:
             return (None,)
         if self._cur == STILL:
-            pause = self._pause[1] if self._pause is not None and self._pause[0] == self._cur_start else 0
-            return self._cur, self._cur_start, self._n >= pause
-        return self._cur, self._cur_start, extent(self._cur_row, self._last_row, self.params.theta) >= self._absorber.floor
+            if self._pause is None or self._pause[0] != self._cur_start:
+                return self._cur, self._cur_start, self._n
+            return self._cur, self._cur_start, self._n >= self._pause[1]
+        return (self._cur, self._cur_start,
+                extent(self._cur_row, self._last_row, self.params.theta) >= self._absorber.floor,
+                self._pushed if self._slowing() else None)
+
+    def _slowing(self) -> bool:
+        """Whether the latest α samples pushed moved less than at 2ε (the speed under which a
+        movement is slowing to rest, :meth:`_ramps`) — a cheap sign, from the raw samples, that
+        the ones still being smoothed may read still."""
+        recent = self._recent
+        return (len(recent) > self.alpha
+                and extent(recent[0], recent[-1], self.params.theta) <= 2.0 * self.params.eps * self.alpha / self.rate)
 
     def _fork(self) -> "Segmenter":
         """An independent copy for :meth:`held` (no more samples are pushed to it)."""
         other = copy.copy(self)
         other._absorber, other._since = self._absorber.copy(), list(self._since)
-        if self._cur == STILL:
-            other._smoother = self._smoother.fork()
+        other._smoother = self._smoother.fork()
         return other
 
     def _smooth(self, sample: tuple, out: list[Token]) -> None:
@@ -385,7 +400,9 @@ class Segmenter:
             self._sign = -self._sign  # as quat.hemisphere_signs: parity of flips so far
         self._raw_q = (qx, qy, qz, qw)
         s = self._sign
-        for r in self._smoother.push((t, px, py, pz, qx * s, qy * s, qz * s, qw * s)):
+        row = (t, px, py, pz, qx * s, qy * s, qz * s, qw * s)
+        self._recent.append(row)
+        for r in self._smoother.push(row):
             self._classify(r, out)
 
     def _classify(self, row: np.ndarray, out: list[Token]) -> None:
