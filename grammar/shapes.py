@@ -443,10 +443,8 @@ class Refiner:
     were at the action's rejection distance (:meth:`_best`). The best window wins — unless
     two learned actions fit the motion's two parts better than one fits it (:meth:`_two`):
     then both are read, back to back (with no pause within :data:`SPOT_MAX` tokens, the
-    segment's own tokens are tried so, and a best window that joins the segment to the next
-    is tried against a gesture starting anywhere in the segment's tokens and one after it).
-    With none, the segment's own tokens are searched as an unknown run's are (two gestures
-    or one); failing that, it is unknown. A window may also take back up to
+    segment's own tokens are tried so). With none, the segment's own tokens are searched as an
+    unknown run's are (two gestures or one); failing that, it is unknown. A window may also take back up to
     :data:`UNKNOWN_REACH` tokens of the unknown run before it, or reach as far into the
     unknown run after it. Tokens a window takes from the next segment are taken from it;
     tokens it gives up are unknown. An unknown run of :data:`SPOT_TOKENS` tokens or more
@@ -538,8 +536,7 @@ class Refiner:
             lowest = self._unknown.first if pending else first  # it may take back tokens of an unknown run
             back = UNKNOWN_REACH if pending else REACH
             ends = [(seg.stop - TRIM, seg.stop + REACH)]
-            cut = after is not None and after.action in self.shapes.names
-            if cut:  # one gesture the Matcher cut in two
+            if after is not None and after.action in self.shapes.names:  # one gesture the Matcher cut in two
                 ends.append((after.stop - TRIM, after.stop + REACH))
             elif after is not None and after.action == UNKNOWN:
                 ends.append((seg.stop, min(after.stop, seg.stop + UNKNOWN_REACH)))
@@ -554,12 +551,6 @@ class Refiner:
             if two is not None:
                 return self._both(two, first, seg.stop, known)
             best = self._best(starts, ends, known, motion=motion)
-            if best is not None and motion is None and cut and not ends[0][0] <= best[1] <= ends[0][1]:
-                # across into the next segment: or a gesture of this one's tokens, then one of the next's?
-                a = min(first, best[0])
-                two = self._two((a, best[1]), known, heads=range(a, max(a, seg.stop - SPOT_TOKENS) + 1))
-                if two is not None:
-                    return self._both(two, first, seg.stop, known)
             found = [best] if best is not None else []
             if best is None and SPOT_TOKENS <= seg.stop - first <= SPOT_MAX:  # none fits around it: searched within
                 two = self._two((first, seg.stop), known, whole=False)
@@ -674,29 +665,22 @@ class Refiner:
         self._unknown = None if f <= pending.first else replace(pending, stop=f, end=self.tokens[f - 1].end)
         self._done = f
 
-    def _two(self, motion, known: int, whole: bool = True, heads=None):
+    def _two(self, motion, known: int, whole: bool = True):
         """A motion between pauses read as two learned gestures back to back — ``(first, cut,
         action, edits)`` and ``(cut, stop, action, edits)`` — when that explains it better than
-        one action: each window the action it is nearest and within that action's rejection
-        distance, the two windows' costs sum to less than the best one window's. Both readings
-        are weighed over the same path, the motion's: a window costs its edits plus
-        ``WEIGHT`` × its shape distance counted over its share of the path's length, and what
-        a reading leaves out of the motion counts at its action's rejection distance (as
-        :meth:`_best` weighs a window against its motion). Each gesture's edits count whole,
-        so one window is read unless it fits worse than the two parts together; and a small
-        gesture beside a long one is not taken in by it for weighing little in the long
-        one's shape, resampled by arc length. The windows start within :data:`TRIM` tokens of
-        the motion's start (or at ``heads``) and may leave up to :data:`TRIM` tokens out at
-        its end; each part holds at least :data:`SPOT_TOKENS` tokens. Unless ``whole``, two
-        are read even where no one window fits. None otherwise."""
+        one action: the two windows' scores (``edits + WEIGHT × shape distance``, each the
+        action it is nearest and within that action's rejection distance) sum to less than the
+        best one window's (each gesture scores what it costs, so one window is read unless it
+        fits worse than the two parts together). The windows may leave up to :data:`TRIM`
+        tokens out at either end of the motion; each part holds at least :data:`SPOT_TOKENS`
+        tokens. Unless ``whole``, two are read even where no one window fits. None otherwise."""
         from doodle.core.tokens import CODES
 
         a, b = motion
         if b - a < 2 * SPOT_TOKENS:
             return None
         auto = self.shapes.automaton
-        heads = heads if heads is not None else range(a, a + TRIM + 1)
-        cuts = range(a + SPOT_TOKENS, b - SPOT_TOKENS + 1)
+        heads, cuts = range(a, a + TRIM + 1), range(a + SPOT_TOKENS, b - SPOT_TOKENS + 1)
         windows, edits = [], []
         for f in sorted(set(heads) | set(cuts)):
             d = auto.initial.copy()
@@ -710,29 +694,20 @@ class Refiner:
             return None
         ds = self.shapes.distances_of(windows, self._read)
         edits = np.array(edits)
-        cum = self._arc(a, b)
-        total = cum[-1] if cum[-1] > 0 else 1.0
-        span = np.array([[cum[f - a], cum[e - a]] for f, e in windows]) / total
-        part, head, tail = (span[:, 1] - span[:, 0])[:, None], span[:, :1], 1.0 - span[:, 1:]
-        fits, reject = self._fits(edits, ds), self.shapes.reject[None, :]
-        def cost(left_out):  # per window, its best action's cost over the motion's path
-            return np.where(fits, edits + WEIGHT * (part * ds + left_out * reject), np.inf).min(axis=1)
-
-        whole_score, first_score, last_score = cost(head + tail), cost(head), cost(tail)
-        one = min((whole_score[i] for i, (f, e) in enumerate(windows) if f in heads and e >= b - TRIM), default=np.inf)
+        alone = np.where(self._fits(edits, ds), edits + WEIGHT * ds, np.inf)
+        score = alone.min(axis=1)
+        one = min((score[i] for i, (f, e) in enumerate(windows) if f in heads and e >= b - TRIM), default=np.inf)
         firsts = [i for i, (f, e) in enumerate(windows) if f in heads and e in cuts]
         lasts = {}
         for i, (f, e) in enumerate(windows):
-            if f in cuts and e >= b - TRIM and (f not in lasts or last_score[i] < last_score[lasts[f]]):
+            if f in cuts and e >= b - TRIM and (f not in lasts or score[i] < score[lasts[f]]):
                 lasts[f] = i
-        pairs = [(first_score[i] + last_score[lasts[windows[i][1]]], i, lasts[windows[i][1]])
-                 for i in firsts if windows[i][1] in lasts]
+        pairs = [(score[i] + score[lasts[windows[i][1]]], i, lasts[windows[i][1]]) for i in firsts if windows[i][1] in lasts]
         if not pairs:
             return None
         two, i, j = min(pairs)
         if not np.isfinite(two) or (whole and not np.isfinite(one)) or two >= one:
             return None
-        alone = np.where(fits, edits + WEIGHT * ds, np.inf)
         k1, k2 = int(np.argmin(alone[i])), int(np.argmin(alone[j]))
         return (*windows[i], k1, float(edits[i, k1])), (*windows[j], k2, float(edits[j, k2]))
 

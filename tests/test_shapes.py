@@ -300,29 +300,3 @@ def test_a_segment_with_no_pause_near_is_tried_as_two_gestures(tmp_path):
     doodle, spans = stream(pieces, np.random.default_rng(1), False)
     named = [s.action for s in recognize(doodle, load_actions(lib, False))["c0"][1] if s.action != "unknown"]
     assert named == [g for g, _, _ in spans]
-
-
-def test_a_small_gesture_beside_a_long_one_is_not_taken_in_by_it(tmp_path):
-    """Sub_U005's hook, left uppercut and right-left-right combo back to back, read from the
-    right-hand controller alone (the uppercut is a left-hand gesture: a small motion of that
-    hand). One window over the uppercut and the combo fits the combo, the uppercut weighing
-    little in its shape resampled by arc length; weighed over the same path, each window's
-    shape distance counted over its share of it, two gestures explain it better, and all
-    three are read (the uppercut was lost)."""
-    from bench.learning_protocol import load as load_vive, make_library, stream
-    from grammar.recognizer import load_actions, recognize
-
-    if not VIVE.is_dir():
-        pytest.skip("real Vive recordings not found")
-    user = load_vive(VIVE)["Sub_U005"]
-    lib = make_library(tmp_path / "mine", {g: user[g][:3] for g in sorted(user)}, ("c0",))
-
-    class InOrder:
-        def permutation(self, n):
-            return np.arange(n)
-
-    pieces = [(g, user[g][k].select(["c0"])) for g, k in (("hook_left", 3), ("uppercut_left", 4),
-                                                          ("right_left_right_combo", 3))]
-    doodle, spans = stream(pieces, InOrder(), False)
-    named = [s.action for s in recognize(doodle, load_actions(lib, False))["c0"][1] if s.action != "unknown"]
-    assert named == [g for g, _, _ in spans]
