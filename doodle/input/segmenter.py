@@ -281,7 +281,7 @@ class Segmenter:
         self._tok_fast = self._run_fast = None  # (first, last) sample over 2ε: token before the run, the run
         self._since: list = []  # runs shorter than α since the last confirmed one (corner candidates)
         self._pause: tuple | None = None  # (start, samples classified from which it may be a pause) of the still :meth:`held` last read
-        self._recent: deque = deque(maxlen=self.alpha + 1)  # the latest samples pushed, as smoothed (:meth:`_slowing`)
+        self._recent: deque = deque(maxlen=self.alpha + 1)  # the latest samples pushed, raw (:meth:`_slowing`)
 
     @property
     def pending(self) -> Token | None:
