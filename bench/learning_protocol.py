@@ -22,7 +22,7 @@ Protocol (the one someone with new users would run):
   (back to back); recognised whole; a detection counts when its name is right and it
   overlaps a true gesture not yet counted (precision, recall, F1).
 * **Constants held out.** Each constant the recogniser keeps (:data:`grammar.shapes.WEIGHT`,
-  :data:`grammar.shapes.SPREAD_Z`; the orientation weight is chosen per library on its own
+  :data:`grammar.shapes.SPREAD_Z`, :data:`grammar.shapes.TEMPO`; the orientation weight is chosen per library on its own
   examples, :func:`grammar.shapes.choose_turn`) is swept over a grid; for each user the value best on the
   other four users is taken and that user's figure at it reported (leave one user out),
   beside the product's value on all five (in-sample). Nothing is chosen on the user it is
@@ -47,8 +47,10 @@ import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "vive-gestures"
 SETTINGS = (("c0",), ("c0", "c1"))
-GRID = {"WEIGHT": (8.0, 31.0, 62.0, 125.0), "SPREAD_Z": (0.0, 1.96, 2.576)}  # swept by `make bench` (the product's values among them)
-FULL_GRID = {"WEIGHT": (0.0, 8.0, 31.0, 62.0, 125.0), "SPREAD_Z": (0.0, 1.645, 1.96, 2.576)}  # with --full (about 15 minutes)
+GRID = {"WEIGHT": (8.0, 31.0, 62.0, 125.0), "SPREAD_Z": (0.0, 1.96, 2.576),
+        "TEMPO": (1.25, 1.5, 2.0, np.inf)}  # swept by `make bench` (the product's values among them)
+FULL_GRID = {"WEIGHT": (0.0, 8.0, 31.0, 62.0, 125.0), "SPREAD_Z": (0.0, 1.645, 1.96, 2.576),
+             "TEMPO": (1.1, 1.25, 1.5, 2.0, 3.0, np.inf)}  # with --full
 
 
 def load(root: Path = ROOT) -> dict:
@@ -74,8 +76,8 @@ def make_library(folder: Path, examples: dict, tracks) -> Path:
     library = Library(folder.name, (), str(manifest_path(folder)))
     for name, doodles in examples.items():
         library, files, _, _ = learn_action(library, name, doodles, list(tracks), SegmenterParams(), folder)
-        for file, (paths, quats) in files.items():
-            save_paths(folder / "shapes" / file, paths, quats)
+        for file, shape in files.items():
+            save_paths(folder / "shapes" / file, *shape)
     atomic_write(manifest_path(folder), [format_library(library, folder.resolve())])
     return folder
 

@@ -58,6 +58,7 @@ class Learned:
     mandatory: frozenset
     tolerance: float | None = None  # edits a new performance may be from the expression
     paths: np.ndarray | None = None  # the examples' paths resampled by arc length (grammar.shapes)
+    seconds: tuple = ()  # each example's motion: from its first token's start to its last's end, pauses left out
 
 
 def canonical(t: np.ndarray, p: np.ndarray, q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -189,12 +190,17 @@ def _dtw_cost(a, b) -> float:
 
 def token_string(track: Track, rate: float, params: SegmenterParams = SegmenterParams()) -> tuple[str, ...]:
     """A track's compacted token names without leading and trailing pauses."""
-    names = [k.name for k in tokenize(track, rate, params)]
-    while names and names[0] == "T_STILL":
-        names.pop(0)
-    while names and names[-1] == "T_STILL":
-        names.pop()
-    return tuple(names)
+    return tuple(k.name for k in _motion_tokens(track, rate, params))
+
+
+def _motion_tokens(track: Track, rate: float, params: SegmenterParams) -> list:
+    """A track's tokens without leading and trailing pauses."""
+    tokens = tokenize(track, rate, params)
+    while tokens and tokens[0].name == "T_STILL":
+        tokens.pop(0)
+    while tokens and tokens[-1].name == "T_STILL":
+        tokens.pop()
+    return tokens
 
 
 def _align(ref: list[str], seq: list[str]) -> list[tuple[int | None, int | None]]:
@@ -306,15 +312,16 @@ def learn(examples: list[tuple[np.ndarray, np.ndarray, np.ndarray]], rate: float
     if min(durations) <= 0 or max(durations) > 10 * min(durations):
         raise DoodleError(f"examples last {', '.join(f'{d:.2f}' for d in durations)} s: one is more than 10× "
                           "another — were they all the same gesture?")
-    strings = []
+    strings, seconds = [], []
     for k, (t, p, q) in enumerate(examples):
-        s = token_string(Track(f"example {k + 1}", t, p, q, np.ones(len(t), dtype=bool)), rate, params)
-        if not s:
+        tokens = _motion_tokens(Track(f"example {k + 1}", t, p, q, np.ones(len(t), dtype=bool)), rate, params)
+        if not tokens:
             raise DoodleError(f"example {k + 1} is all still: nothing was performed")
-        strings.append(s)
+        strings.append(tuple(k.name for k in tokens))
+        seconds.append(max(float(t[tokens[-1].end - 1] - t[tokens[0].start]), 1.0 / rate))
     average = token_string(dba(examples), rate, params)
     learned = replace(expression_of(strings + ([average] if average else [])),
-                      paths=np.array([shapes.resample(p) for _, p, _ in examples]))
+                      paths=np.array([shapes.resample(p) for _, p, _ in examples]), seconds=tuple(seconds))
     return replace(learned, tolerance=tolerance(learned.strings, len(strings))) if with_tolerance else learned
 
 

@@ -64,7 +64,7 @@ def recognize(doodle, compiled: Compiled, params: SegmenterParams = SegmenterPar
         if compiled.shapes is not None:  # learned actions re-decided by their examples' shapes
             track = doodle.track(name)
             others = {o: (doodle.track(o).p, doodle.track(o).q, doodle.track(o).valid) for o in tokens if o != name}
-            segments = refine(segments, toks, track.p, track.valid, compiled.shapes, name, track.q, others)
+            segments = refine(segments, toks, track.p, track.valid, compiled.shapes, name, track.q, others, track.t)
         result[name] = (toks, segments)
     return decide(doodle, compiled, result, threshold, interactions)
 
@@ -268,7 +268,7 @@ class _Chain:
         """Give the Refiner the samples known so far (this track's and the others')."""
         view = tape.track(self.name)
         k = self.offset
-        refiner.p, refiner.valid, refiner.q = view.p[k:], view.valid[k:], view.q[k:]
+        refiner.p, refiner.valid, refiner.q, refiner.t = view.p[k:], view.valid[k:], view.q[k:], view.t[k:]
         for other in refiner.others:
             o = tape.track(other)
             refiner.others[other] = (o.p[k:], o.q[k:], o.valid[k:])

@@ -151,6 +151,7 @@ TRIM = 3  # tokens it may give up at either end
 UNKNOWN_REACH = 8  # tokens it may take from a neighbouring unknown run
 SPOT_TOKENS, SPOT_MAX = 4, 40  # unknown runs of this many tokens are searched for a learned action…
 SPOT = 1.0  # …found when its shape distance is under this part of the action's rejection distance
+TEMPO = 1.5  # a window is not an action when it lasts over this × its longest example or under its shortest / this
 
 
 @dataclass(frozen=True, eq=False)
@@ -178,6 +179,8 @@ class ShapeSet:
     automaton: object  # grammar.matcher.Automaton of the names' expressions (edit distances, capped)
     tracks: tuple = ()  # per name, the track it is recognised on (None: any)
     partners: tuple = ()  # per name, the other tracks it is performed with (two-handed actions), or ()
+    longest: np.ndarray | None = None  # per name, its longest example's seconds (inf: not known)
+    shortest: np.ndarray | None = None  # per name, its shortest example's seconds (0: not known)
 
     def allowed(self, track: str | None, present=None) -> np.ndarray:
         """Which actions may be recognised on ``track`` (two-handed ones: when every track
@@ -229,30 +232,32 @@ FORMAT = 2
 STRADDLES = 4  # synthetic negatives per example: joined to this many others, spread over the library
 
 
-def save_paths(path, paths: np.ndarray, quats: np.ndarray | None = None) -> None:
+def save_paths(path, paths: np.ndarray, quats: np.ndarray | None = None, seconds=None) -> None:
     """Write example shapes to ``path`` (.npz, no pickles), atomically: paths (k, n, 3) of
     one track (format 1), or paths (k, T, n, 3) with orientations (k, T, n, 4) of T tracks
-    read together (format 2)."""
+    read together (format 2); with ``seconds`` (k,), how long each example lasted."""
     from doodle.core.files import atomic_path
 
+    extra = {} if seconds is None else {"seconds": np.asarray(seconds, dtype=float)}
     with atomic_path(path) as tmp:
         with open(tmp, "wb") as f:
             if quats is None:
-                np.savez(f, paths=np.asarray(paths, dtype=float), format=np.array(1))
+                np.savez(f, paths=np.asarray(paths, dtype=float), format=np.array(1), **extra)
             else:
                 np.savez(f, paths=np.asarray(paths, dtype=float), quats=np.asarray(quats, dtype=float),
-                         format=np.array(2))
+                         format=np.array(2), **extra)
 
 
 def load_paths(path, action: str = "") -> np.ndarray:
     """Example paths (k, n, 3) of the first track of a shape file; DoodleError naming the file and action."""
-    paths, _ = load_shape(path, action)
+    paths, _, _ = load_shape(path, action)
     return paths[:, 0]
 
 
-def load_shape(path, action: str = "") -> tuple[np.ndarray, np.ndarray | None]:
-    """Example paths (k, T, n, 3) and orientations (k, T, n, 4) or None (format 1, paths
-    alone) from a shape file; DoodleError naming the file and action."""
+def load_shape(path, action: str = "") -> tuple[np.ndarray, np.ndarray | None, np.ndarray | None]:
+    """Example paths (k, T, n, 3), orientations (k, T, n, 4) or None (format 1, paths
+    alone) and each example's duration in seconds (k,) or None (files written without)
+    from a shape file; DoodleError naming the file and action."""
     from doodle.core.errors import DoodleError
     from doodle.core.npz import read_npz
 
@@ -283,13 +288,19 @@ def load_shape(path, action: str = "") -> tuple[np.ndarray, np.ndarray | None]:
                           f"a hand's path stays within {MAX_METRES:g} m")
     if quats is not None and np.abs(quats).max() > 2.0:
         raise DoodleError(f"{where}: 'quats' are not unit quaternions")
-    return paths.astype(float), (None if quats is None else quats.astype(float))
+    seconds = arrays.get("seconds")
+    if seconds is not None and (seconds.dtype.kind not in "fiu" or seconds.shape != paths.shape[:1]
+                                or not np.isfinite(seconds).all() or seconds.min() <= 0):
+        raise DoodleError(f"{where}: 'seconds' must be one positive duration per example ({paths.shape[0]}), "
+                          f"got {seconds.dtype} {seconds.shape}")
+    return paths.astype(float), (None if quats is None else quats.astype(float)), \
+        (None if seconds is None else seconds.astype(float))
 
 
 def shape_set(named: dict, expressions: dict, tracks: dict | None = None, cap: float = 20.0,
               automaton=None, partners: dict | None = None) -> ShapeSet | None:
     """A :class:`ShapeSet` from ``{action: example shapes}`` — paths (k, n, 3), or
-    ``(paths (k, T, n, 3), quats (k, T, n, 4) | None)`` — the actions' expressions, the
+    ``(paths (k, T, n, 3), quats (k, T, n, 4) | None[, seconds (k,) | None])`` — the actions' expressions, the
     tracks they are recognised on (``{action: track}``, default none) and, for actions read
     on several tracks, the others (``{action: (track, …)}``); None when no action has
     shapes. Edit distances count up to ``cap``; ``automaton``, when given, is a ready one
@@ -302,10 +313,12 @@ def shape_set(named: dict, expressions: dict, tracks: dict | None = None, cap: f
 
     names = tuple(named)
     tracks, partners = tracks or {}, partners or {}
-    keyed = {}
+    keyed, longest, shortest = {}, np.full(len(names), np.inf), np.zeros(len(names))
     for k, n in enumerate(names):
         shape = named[n]
-        paths, quats = (shape, None) if isinstance(shape, np.ndarray) else shape
+        paths, quats, seconds = (shape, None, None) if isinstance(shape, np.ndarray) else (tuple(shape) + (None,))[:3]
+        longest[k] = np.inf if seconds is None else float(np.max(seconds))
+        shortest[k] = 0.0 if seconds is None else float(np.min(seconds))
         paths = np.asarray(paths, dtype=float)
         if paths.ndim == 3:
             paths = paths[:, None]
@@ -326,7 +339,7 @@ def shape_set(named: dict, expressions: dict, tracks: dict | None = None, cap: f
     auto = automaton or Automaton(list(names), [compile_expression(parse(expressions[n], n)) for n in names],
                                   threshold=cap, protect_still=False)
     return ShapeSet(names, tuple(groups), reject, auto, tuple(tracks.get(n) for n in names),
-                    tuple(tuple(partners.get(n, ())) for n in names))
+                    tuple(tuple(partners.get(n, ())) for n in names), longest, shortest)
 
 
 TURNS = (0.0, 0.25, 0.5, 1.0)  # the orientation weights a library chooses among (:func:`choose_turn`)
@@ -418,9 +431,10 @@ def reject_distances(group: Group, members: list) -> np.ndarray:
 
 
 def refine(segments: list, tokens: list, p: np.ndarray, valid: np.ndarray, shapes: ShapeSet,
-           track: str | None = None, q: np.ndarray | None = None, others: dict | None = None) -> list:
+           track: str | None = None, q: np.ndarray | None = None, others: dict | None = None,
+           t: np.ndarray | None = None) -> list:
     """Batch form of :class:`Refiner`: every segment of a track re-decided."""
-    refiner = Refiner(shapes, p, valid, track, q, others)
+    refiner = Refiner(shapes, p, valid, track, q, others, t)
     refiner.tokens.extend(tokens)
     return refiner.push(segments) + refiner.close()
 
@@ -467,8 +481,8 @@ class Refiner:
     """
 
     def __init__(self, shapes: ShapeSet, p: np.ndarray, valid: np.ndarray, track: str | None = None,
-                 q: np.ndarray | None = None, others: dict | None = None):
-        self.shapes, self.p, self.valid, self.q = shapes, p, valid, q
+                 q: np.ndarray | None = None, others: dict | None = None, t: np.ndarray | None = None):
+        self.shapes, self.p, self.valid, self.q, self.t = shapes, p, valid, q, t
         self.track, self.others = track, dict(others or {})
         self._allowed = shapes.allowed(track, set(self.others) | {track})
         self.tokens: list = []
@@ -694,7 +708,7 @@ class Refiner:
             return None
         ds = self.shapes.distances_of(windows, self._read)
         edits = np.array(edits)
-        alone = np.where(self._fits(edits, ds), edits + WEIGHT * ds, np.inf)
+        alone = np.where(self._fits(edits, ds, windows), edits + WEIGHT * ds, np.inf)
         score = alone.min(axis=1)
         one = min((score[i] for i, (f, e) in enumerate(windows) if f in heads and e >= b - TRIM), default=np.inf)
         firsts = [i for i, (f, e) in enumerate(windows) if f in heads and e in cuts]
@@ -711,13 +725,31 @@ class Refiner:
         k1, k2 = int(np.argmin(alone[i])), int(np.argmin(alone[j]))
         return (*windows[i], k1, float(edits[i, k1])), (*windows[j], k2, float(edits[j, k2]))
 
-    def _fits(self, edits: np.ndarray, ds: np.ndarray, strict: float = 1.0) -> np.ndarray:
+    def _fits(self, edits: np.ndarray, ds: np.ndarray, windows: list, strict: float = 1.0) -> np.ndarray:
         """(windows, actions): each window is the action it is nearest (``edits + WEIGHT ×
-        shape distance``, among those allowed on this track), if its shape distance is within
-        ``strict`` × that action's rejection distance."""
-        own = np.where(self._allowed & np.isfinite(ds), edits + WEIGHT * ds, np.inf)
+        shape distance``, among those allowed on this track and whose examples last about
+        as long as it: :meth:`_lasts`), if its shape distance is within ``strict`` × that
+        action's rejection distance."""
+        own = np.where(self._allowed & np.isfinite(ds) & self._lasts(windows), edits + WEIGHT * ds, np.inf)
         return (np.isfinite(own) & (own == own.min(axis=1, keepdims=True))
                 & (ds <= strict * self.shapes.reject[None, :]))
+
+    def _lasts(self, windows: list) -> np.ndarray:
+        """(windows, actions): whether each window lasts no more than :data:`TEMPO` × the
+        action's longest example and no less than its shortest / :data:`TEMPO` (True where
+        the examples' durations or the samples' times are not known). Arc-length resampling
+        makes shapes blind to time: without this a gesture and a small one after it with no
+        pause between (a combo, then a hook that barely moves this hand) read as the first
+        alone, and a part of a gesture as a whole gesture of another action. Performers do
+        vary in tempo: the factor is wide (by leave-one-user-out, ``make bench``), and
+        learning keeps each example's motion without its still ends
+        (:attr:`grammar.learn.Learned.seconds`), as a window holds no pause at its ends."""
+        longest = self.shapes.longest
+        if self.t is None or longest is None or not windows:
+            return np.ones((len(windows), len(self.shapes.names)), dtype=bool)
+        t = self.t
+        spans = np.array([t[min(self.tokens[e - 1].end, len(t)) - 1] - t[self.tokens[f].start] for f, e in windows])
+        return (spans[:, None] <= TEMPO * longest[None, :]) & (spans[:, None] * TEMPO >= self.shapes.shortest[None, :])
 
     def _arc(self, a: int, b: int) -> np.ndarray:
         """Cumulative path length of the track's valid samples over tokens a..b, at each
@@ -774,7 +806,7 @@ class Refiner:
                 inside = np.array([(cum[min(max(e, a), b) - a] - cum[min(max(f, a), b) - a]) / cum[-1]
                                    for f, e in windows])[:, None]
                 cost = inside * ds + (1.0 - inside) * self.shapes.reject[None, :]
-        score = np.where(self._fits(edits, ds, strict), edits + WEIGHT * cost, np.inf)
+        score = np.where(self._fits(edits, ds, windows, strict), edits + WEIGHT * cost, np.inf)
         if motion is not None and tuple(motion) in windows:  # a whole motion that fits is one gesture
             m = windows.index(tuple(motion))
             if np.isfinite(score[m]).any():

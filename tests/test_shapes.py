@@ -300,3 +300,49 @@ def test_a_segment_with_no_pause_near_is_tried_as_two_gestures(tmp_path):
     doodle, spans = stream(pieces, np.random.default_rng(1), False)
     named = [s.action for s in recognize(doodle, load_actions(lib, False))["c0"][1] if s.action != "unknown"]
     assert named == [g for g, _, _ in spans]
+
+
+def test_a_small_gesture_after_a_long_one_is_not_taken_in_by_it(tmp_path, monkeypatch):
+    """Sub_U004's left-right-left combo, then a left hook, back to back, read on c0 (the
+    right hand, which the hook barely moves): shapes are resampled by arc length, so the
+    combo's window run on over the hook fits the combo as well as its own span does, and
+    the hook was lost. The combo's examples last under 3.5 s, that window over 5: it is not
+    the combo (:data:`grammar.shapes.TEMPO`), and both are read."""
+    from bench.learning_protocol import load as load_vive, make_library, stream
+    from grammar.recognizer import load_actions, recognize
+
+    if not VIVE.is_dir():
+        pytest.skip("real Vive recordings not found")
+    user = load_vive(VIVE)["Sub_U004"]
+    lib = make_library(tmp_path / "mine", {g: [user[g][k] for k in (0, 1, 3)] for g in sorted(user)}, ("c0",))
+    compiled = load_actions(lib, False)
+    assert compiled.shapes.longest[compiled.shapes.names.index("left_right_left_combo")] < 3.5
+    pieces = [(g, user[g][4]) for g in ("left_right_left_combo", "hook_left")]
+    doodle, spans = stream(pieces, np.random.default_rng(0), False)
+
+    def named():
+        return [s.action for s in recognize(doodle, compiled)["c0"][1] if s.action != "unknown"]
+
+    assert named() == [g for g, _, _ in spans]
+    monkeypatch.setattr(shapes, "TEMPO", np.inf)  # durations not compared: the hook is taken in
+    assert named() == ["left_right_left_combo"]
+
+
+def test_shape_files_keep_how_long_each_example_lasted(tmp_path):
+    """``doodle learn`` writes each example's motion in seconds (its still ends left out)
+    beside its shape; files without them still load (no durations compared), and bad
+    durations are refused with the file named."""
+    lib, files = _learn_all(tmp_path, ["hook_right"])
+    paths, quats, seconds = shapes.load_shape(lib / "shapes" / "hook_right.npz")
+    from doodle.input.csvimport import read_csv
+
+    recorded = [read_csv(f, convention="unity").t for f in files["hook_right"][:3]]
+    assert seconds.shape == (3,) and np.all(seconds > 0.5)
+    assert np.all(seconds <= [t[-1] - t[0] for t in recorded])
+    old = tmp_path / "old.npz"
+    shapes.save_paths(old, paths, quats)
+    assert shapes.load_shape(old)[2] is None
+    for bad in (np.array([1.0, -1.0, 2.0]), np.array([1.0, 2.0]), np.array([1.0, np.nan, 2.0])):
+        np.savez(tmp_path / "bad.npz", paths=paths, quats=quats, format=np.array(2), seconds=bad)
+        with pytest.raises(DoodleError, match="bad.npz.*'seconds' must be one positive duration per example"):
+            shapes.load_shape(tmp_path / "bad.npz", "hook_right")

@@ -112,7 +112,8 @@ def learn_action(existing, name: str, doodles: list, tracks: list[str], params, 
     ``name`` learned from ``doodles`` (one performance each) on ``tracks`` — one track, or
     several performing one two-handed gesture (recognised on the first, its shape read on
     all). Returns the new library, its shape files to write (``{file name: (paths,
-    quats)}``), what was learned per track and the seconds learning took."""
+    quats, seconds)}``: :func:`grammar.shapes.save_paths`), what was learned per track and
+    the seconds learning took."""
     import numpy as np
 
     from doodle.core.files import safe_file_name
@@ -147,7 +148,7 @@ def learn_action(existing, name: str, doodles: list, tracks: list[str], params, 
     library = Library(existing.name, kept + (action,), existing.source, existing.roles, interactions, existing.states)
     paths = np.array([p for p, _ in shapes])
     quats = np.array([q for _, q in shapes])
-    return library, {file: (paths, quats)}, learned, took
+    return library, {file: (paths, quats, np.array(lead.seconds))}, learned, took
 
 
 def _not_empty(learned):
@@ -205,8 +206,8 @@ def cmd_learn(args) -> int:
                                                ", ".join(Path(p).name for p in args.examples))
     with updating(folder) as stage:  # the library changes whole once all is written, or not at all
         (stage / "shapes").mkdir(exist_ok=True)
-        for file, (paths, quats) in new.items():
-            save_paths(stage / "shapes" / file, paths, quats)
+        for file, shape in new.items():
+            save_paths(stage / "shapes" / file, *shape)
         atomic_write(manifest_path(stage), [format_library(library, folder.resolve())])
         compiled = compile_library(combine(None if args.no_builtin else builtin(), load_library(stage)))
     names = [name]
