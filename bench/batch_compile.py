@@ -16,7 +16,8 @@ see the same load, each beside the target ≥ 1.8× on 2 cores:
   compiling the files in turn (its start-up and first compile included once);
 * **steady state** — the same 16 compiles once everything is loaded: in turn, after one
   warm-up compile in that process, against a batch sent to a running 2-worker cluster
-  whose workers have each compiled once (``--scheduler`` path).
+  whose workers have each compiled once (``--scheduler`` path), its housekeeping
+  :data:`doodle.app.batch.QUIET` as a local one's.
 
 OpenBLAS is pinned to one thread everywhere (``OPENBLAS_NUM_THREADS=1``, set for the child
 processes and Dask's workers), so that two workers do not fight over two cores. The
@@ -145,6 +146,7 @@ def end_to_end(takes: Path, out: Path, runs: int) -> tuple[list, list, bool]:
 def steady_state(takes: Path, out: Path, runs: int) -> tuple[list, list]:
     import logging
 
+    import dask
     from dask.distributed import LocalCluster
 
     from doodle.app import batch
@@ -154,7 +156,7 @@ def steady_state(takes: Path, out: Path, runs: int) -> tuple[list, list]:
     args = build_parser().parse_args(["compile", str(takes), "-o", str(out)])
     jobs, options = batch.plan(batch.expand_inputs(args.files), out), batch.options_for_workers(args)
     serial, parallel = [], []
-    with LocalCluster(n_workers=WORKERS, threads_per_worker=1, processes=True, dashboard_address=None,
+    with dask.config.set(batch.QUIET), LocalCluster(n_workers=WORKERS, threads_per_worker=1, processes=True, dashboard_address=None,
                       silence_logs=logging.CRITICAL, env={"OPENBLAS_NUM_THREADS": "1"}) as cluster:
         warm = [batch.Job(jobs[0].file, out / ".warm" / str(i)) for i in range(WORKERS)]
         batch.run(warm, compiled_counts, options, WORKERS, cluster.scheduler_address)
