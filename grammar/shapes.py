@@ -470,7 +470,9 @@ class Refiner:
     is known (or :data:`SPOT_MAX` tokens have passed without one). An unknown run whose
     motion goes on, without a pause, into a shaped segment is not searched: it waits, and
     that segment's windows may take its tokens back (a gesture the Matcher found only the
-    end of is read whole, not as two). The batch form
+    end of is read whole, not as two). Whatever unknown run lies before a shaped segment once
+    that segment's window is chosen — however it was made up: what windows gave up, short
+    unknown segments — is searched so too, whole (:meth:`_spot_pending`). The batch form
     (:func:`refine`) is this run to the end, so streaming equals batch.
 
     ``tokens`` is the track's token list (append as the Segmenter gives them); ``p``, ``q``
@@ -489,7 +491,6 @@ class Refiner:
         self._waiting: list = []
         self._done = 0  # tokens before this are decided
         self._unknown = None
-        self._deferred = False  # the pending unknown run waits for the segment after it to be searched
 
     def fork(self) -> "Refiner":
         """An independent copy (what it is pushed leaves this one as it is)."""
@@ -542,7 +543,6 @@ class Refiner:
                      and self.tokens[seg.stop].name != "T_STILL")  # into a shaped segment, no pause between
         if seg.action == UNKNOWN and seg.stop - first >= SPOT_TOKENS:
             if continues:  # left pending: the next segment may take it back, the rest is searched then
-                self._deferred = True
                 return self._emit(UNKNOWN, first, seg.stop, False, None)
             found = self._spots(first, seg.stop, known)
         elif seg.action in self.shapes.names:
@@ -574,12 +574,12 @@ class Refiner:
         else:
             return self._emit(seg.action, first, seg.stop, seg.exact, seg.distance)
         if not found:
-            return self._spot_deferred(first, known) + self._emit(UNKNOWN, first, seg.stop, False, None)
+            return self._spot_pending(first, known) + self._emit(UNKNOWN, first, seg.stop, False, None)
         f = found[0][0]
         if f < first:
             self._take_back(f)
-        return (self._spot_deferred(min(f, first), known) + self._emit(UNKNOWN, first, f, False, None)
-                + self._emit_found(found, seg.stop))
+        lead = self._emit(UNKNOWN, first, f, False, None)  # what it gives up joins the pending run first
+        return lead + self._spot_pending(min(f, first), known) + self._emit_found(found, seg.stop)
 
     def _emit_found(self, found: list, stop: int) -> list:
         """Learned actions found in order ``[(first, stop, action, edits), …]`` emitted, the
@@ -624,14 +624,16 @@ class Refiner:
             motion = (moving[0], moving[-1] + 1)
         return self._best(range(a, b), [(a + 2, b)], known, SPOT, motion=motion, across=False)
 
-    def _spot_deferred(self, done: int, known: int) -> list:
-        """The pending unknown run left for the segment after it (what that segment did not
-        take back) searched now; its found action emitted, the rest left pending. ``done``:
-        where decided tokens end once the segment is emitted."""
-        from grammar.matcher import UNKNOWN
-
-        pending, deferred, self._deferred = self._unknown, self._deferred, False
-        if pending is None or not deferred or pending.stop - pending.first < SPOT_TOKENS:
+    def _spot_pending(self, done: int, known: int) -> list:
+        """The pending unknown run before a shaped segment (what that segment did not take
+        back, with what it gave up at its start) searched now, when it holds at least
+        :data:`SPOT_TOKENS` tokens; its found actions emitted, the rest left pending. ``done``:
+        where decided tokens end once the segment is emitted. The run is searched whole,
+        however it was made: back to back, a gesture's tokens may end up unknown in pieces —
+        what one segment's window gave up, a short unknown segment of the Matcher's, what the
+        next window gave up — none of them long enough to be searched alone."""
+        pending = self._unknown
+        if pending is None or pending.stop - pending.first < SPOT_TOKENS:
             return []
         found = self._spots(pending.first, pending.stop, known)
         if not found:
@@ -669,7 +671,8 @@ class Refiner:
         (f, c, k1, e1), (_, e, k2, e2) = two
         if f < first:
             self._take_back(f)
-        return (self._spot_deferred(min(f, first), known) + self._emit(UNKNOWN, first, f, False, None)
+        lead = self._emit(UNKNOWN, first, f, False, None)
+        return (lead + self._spot_pending(min(f, first), known)
                 + self._emit(self.shapes.names[k1], f, c, e1 == 0.0, e1)
                 + self._emit(self.shapes.names[k2], c, e, e2 == 0.0, e2) + self._emit(UNKNOWN, e, stop, False, None))
 

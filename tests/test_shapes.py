@@ -328,6 +328,31 @@ def test_a_small_gesture_after_a_long_one_is_not_taken_in_by_it(tmp_path, monkey
     assert named() == ["left_right_left_combo"]
 
 
+def test_a_gesture_in_what_two_neighbours_gave_up_is_searched(tmp_path, monkeypatch):
+    """Sub_U005 on c0, back to back: a right uppercut, a left uppercut, a left-right-left
+    combo. The Matcher's segments there are cut badly; once its neighbours' windows have
+    taken what they fit, the right uppercut's tokens are an unknown run made of pieces
+    (what one segment gave up, a short unknown segment), no one of them long enough to be
+    searched alone. The run is searched whole before the segment after it is emitted, and
+    all three are read."""
+    from bench.learning_protocol import load as load_vive, make_library, stream
+    from grammar.recognizer import load_actions, recognize
+
+    if not VIVE.is_dir():
+        pytest.skip("real Vive recordings not found")
+    user = load_vive(VIVE)["Sub_U005"]
+    compiled = load_actions(make_library(tmp_path / "mine", {g: user[g][:3] for g in sorted(user)}, ("c0",)), False)
+    gestures = ["uppercut_right", "uppercut_left", "left_right_left_combo"]
+    doodle, _ = stream([(g, user[g][k]) for g, k in zip(gestures, (4, 3, 4))], np.random.default_rng(89), False)
+
+    def named():
+        return [s.action for s in recognize(doodle, compiled)["c0"][1] if s.action != "unknown"]
+
+    assert named() == gestures
+    monkeypatch.setattr(shapes.Refiner, "_spot_pending", lambda self, done, known: [])
+    assert named() != gestures
+
+
 def test_shape_files_keep_how_long_each_example_lasted(tmp_path):
     """``doodle learn`` writes each example's motion in seconds (its still ends left out)
     beside its shape; files without them still load (no durations compared), and bad
