@@ -156,8 +156,9 @@ def steady_state(takes: Path, out: Path, runs: int) -> tuple[list, list]:
     args = build_parser().parse_args(["compile", str(takes), "-o", str(out)])
     jobs, options = batch.plan(batch.expand_inputs(args.files), out), batch.options_for_workers(args)
     serial, parallel = [], []
-    with dask.config.set(batch.QUIET), LocalCluster(n_workers=WORKERS, threads_per_worker=1, processes=True, dashboard_address=None,
-                      silence_logs=logging.CRITICAL, env={"OPENBLAS_NUM_THREADS": "1"}) as cluster:
+    with dask.config.set(batch.QUIET), \
+            LocalCluster(n_workers=WORKERS, threads_per_worker=1, processes=True, dashboard_address=None,
+                         silence_logs=logging.CRITICAL, env={"OPENBLAS_NUM_THREADS": "1"}) as cluster:
         warm = [batch.Job(jobs[0].file, out / ".warm" / str(i)) for i in range(WORKERS)]
         batch.run(warm, compiled_counts, options, WORKERS, cluster.scheduler_address)
         for _ in range(runs):

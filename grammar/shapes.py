@@ -578,8 +578,8 @@ class Refiner:
         f = found[0][0]
         if f < first:
             self._take_back(f)
-        lead = self._emit(UNKNOWN, first, f, False, None)  # what it gives up joins the pending run first
-        return lead + self._spot_pending(min(f, first), known) + self._emit_found(found, seg.stop)
+        self._emit(UNKNOWN, first, f, False, None)  # what it gives up joins the pending run (emits nothing)
+        return self._spot_pending(min(f, first), known) + self._emit_found(found, seg.stop)
 
     def _emit_found(self, found: list, stop: int) -> list:
         """Learned actions found in order ``[(first, stop, action, edits), …]`` emitted, the
@@ -671,8 +671,8 @@ class Refiner:
         (f, c, k1, e1), (_, e, k2, e2) = two
         if f < first:
             self._take_back(f)
-        lead = self._emit(UNKNOWN, first, f, False, None)
-        return (lead + self._spot_pending(min(f, first), known)
+        self._emit(UNKNOWN, first, f, False, None)  # joins the pending run (emits nothing)
+        return (self._spot_pending(min(f, first), known)
                 + self._emit(self.shapes.names[k1], f, c, e1 == 0.0, e1)
                 + self._emit(self.shapes.names[k2], c, e, e2 == 0.0, e2) + self._emit(UNKNOWN, e, stop, False, None))
 

@@ -29,7 +29,7 @@ CONNECT_TIMEOUT = "10s"  # to a --scheduler
 # A local cluster's housekeeping slowed down or off. Its defaults sample every worker's stack
 # each 10 ms (the dashboard's profile, which no one sees here), measure memory every 100 ms
 # and tick every 20 ms: with two workers, the scheduler, the client and two nannies on two
-# cores, that took about a quarter of the cores from the compiles (16 demo copies in 3.2 s
+# cores, that took about a fifth of the time from the compiles (16 demo copies in 3.2 s
 # against 2.5 s so).
 QUIET = {
     "distributed.worker.profile.enabled": False,
