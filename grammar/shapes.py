@@ -7,9 +7,9 @@ their own. A learned action therefore keeps the *shapes* of its examples as well
 example's path resampled to :data:`POINTS` points by arc length with the controller's
 orientation there (:func:`sample`; a two-handed action's tracks resampled together, along
 their summed arc length). Its features per step (:func:`features`) are the unit direction
-of the step and how the controller has turned (weighted by a factor each library
-chooses on its own examples, :func:`choose_turn`), in the room's frame — a performer faces
-the table, so left and right mean something, and how the hand turns tells one person's
+of the step and how the controller has turned (weighted by :data:`TURN`, unless a
+library's own examples show another weight clearly better, :func:`choose_turn`), in the
+room's frame — a performer faces the table, so left and right mean something, and how the hand turns tells one person's
 uppercut from their hook; the turn is read relative to the window, so however each person
 holds the controller, the same hand movement reads the same. The shape distance of a performance to an
 action is the smallest DTW cost between its features and an example's, per step. It ranks
@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import copy
 from dataclasses import dataclass, replace
+from functools import lru_cache
 
 import numpy as np
 
@@ -84,7 +85,8 @@ def dtw_costs(x: np.ndarray, templates: np.ndarray) -> np.ndarray:
 
 # --- poses of one or several tracks: resampled together, as features ---------------------
 
-TURN = 0.5  # default weight of the controller's turn beside the path's directions (where a library cannot choose)
+TURN = 0.5  # weight of the controller's turn beside the path's directions (a library's examples may
+#             overrule it: choose_turn; `make bench` shows it held out)
 
 
 def sample(poses, points: int = POINTS) -> tuple[np.ndarray, np.ndarray]:
@@ -342,41 +344,81 @@ def shape_set(named: dict, expressions: dict, tracks: dict | None = None, cap: f
                     tuple(tuple(partners.get(n, ())) for n in names), longest, shortest)
 
 
-TURNS = (0.0, 0.25, 0.5, 1.0)  # the orientation weights a library chooses among (:func:`choose_turn`)
+TURNS = (0.0, 0.25, 0.5, 1.0)  # the orientation weights a library may choose among (:func:`choose_turn`)
+EVIDENCE = 0.05  # a library leaves TURN only when its examples show another weight better at this level
 
 
 def choose_turn(shapes: list, owner: np.ndarray) -> float:
-    """The weight of the controllers' turn in a group's features, chosen on its own
-    examples (``[(action, paths, quats)]``, ``owner`` their actions in order), leaving one
-    example out at a time: the weight in :data:`TURNS` under which most examples are
-    nearest to an example of their own action; on a tie, the one separating the actions
-    most — the mean log ratio of each example's distance to the nearest example of another
-    action over its distance to the nearest of its own. Examples from several people show
-    whether their turns agree (an example left out is then read by the others' examples
-    alone); one person's show how much their turns tell their gestures apart — nothing is
-    tuned on the performances to be recognised."""
+    """The weight of the controllers' turn in a group's features: :data:`TURN` unless the
+    group's own examples (``[(action, paths, quats)]``, ``owner`` their actions in order)
+    show clearly that another weight of :data:`TURNS` tells their actions apart better.
+    Each example is left out in turn and read by its nearest other example; the best other
+    weight (most examples read right; on a tie, the larger mean log ratio of each example's
+    distance to the nearest example of another action over that to the nearest of its own)
+    is taken only when it reads right significantly more of them than :data:`TURN` does —
+    a one-sided exact sign test on the examples the two weights read differently, at
+    :data:`EVIDENCE` shared among the weights tried (Bonferroni).
+
+    Why a test and not the best count: three examples per action give a few dozen reads,
+    and the counts of the weights differ by one or two by chance. Chosen freely, the
+    weight followed that noise — on the Vive recordings with examples from three other
+    people it went from 0 to 1 between libraries, and read a fifth person's gestures worse
+    than the default did (``make bench``). A gesture set told apart by the turn alone (a
+    twist left and a twist right along one path), or by the path alone (a controller held
+    loosely), still moves it. Examples from several people show whether their turns agree
+    (an example left out is then read by the others' examples alone); nothing is tuned on
+    the performances to be recognised."""
     if len(set(owner.tolist())) < 2 or len(owner) < 3:
         return TURN
-    best, key = TURN, None
-    for turn in TURNS:
+    reads, keys = {}, {}
+    for turn in sorted(set(TURNS) | {TURN}):
         feats = np.array([features(paths[j], quats[j] if turn > 0 else None, turn)
                           for _, paths, quats in shapes for j in range(len(paths))])
         everyone = np.concatenate([dtw_costs(feats[k:k + CHUNK // len(feats) + 1], feats)
                                    for k in range(0, len(feats), CHUNK // len(feats) + 1)])  # (K, K)
-        right, ratios = 0, []
+        right, ratios = [], []
         for i in range(len(feats)):
             costs, rest = np.delete(everyone[i], i), np.delete(owner, i)
             own, other = costs[rest == owner[i]], costs[rest != owner[i]]
-            right += int(rest[int(np.argmin(costs))] == owner[i])
+            right.append(bool(rest[int(np.argmin(costs))] == owner[i]))
             if len(own) and len(other):
                 ratios.append(other.min() / max(own.min(), 1e-9))
-        score = (right, float(np.mean(np.log(ratios))) if ratios else 0.0)
-        if key is None or score > key:
-            best, key = turn, score
-    return best
+        reads[turn] = np.array(right)
+        keys[turn] = (int(np.sum(right)), float(np.mean(np.log(ratios))) if ratios else 0.0)
+    others = [turn for turn in reads if turn != TURN]
+    if not others:
+        return TURN
+    best = max(others, key=lambda turn: keys[turn])
+    gained = int(np.sum(reads[best] & ~reads[TURN]))
+    lost = int(np.sum(reads[TURN] & ~reads[best]))
+    return best if _sign_test(gained, gained + lost) < EVIDENCE / len(others) else TURN
 
 
-SPREAD_Z = 1.96  # an action's spread: the 95 % quantile of a half-normal fitted to its examples' distances
+def _sign_test(k: int, n: int) -> float:
+    """One-sided exact sign test: the chance of at least ``k`` successes in ``n`` fair coin tosses."""
+    from math import comb
+
+    return sum(comb(n, j) for j in range(k, n + 1)) / 2.0 ** n if n else 1.0
+
+
+SPREAD = 0.95  # an action's spread admits this share of new performances like its examples (:func:`prediction_bound`)
+
+
+@lru_cache(maxsize=None)
+def prediction_bound(level: float, draws: int) -> float:
+    """How many root mean squares of ``draws`` draws of a zero-mean normal a new draw's
+    magnitude stays within, with probability ``level``: the two-sided quantile of Student's
+    t with ``draws`` degrees of freedom (the new draw over the root mean square is t
+    distributed, the variance being estimated, not known). With the variance known it would
+    be the normal's quantile (1.96 at 0.95); from three draws it is 3.18 — three distances
+    say little about the fourth. Computed as ``√ν tan θ``, θ where the integral of
+    ``cos^(ν−1)`` from 0 reaches ``level`` of its integral to π/2 (T = √ν tan θ)."""
+    if level <= 0 or draws < 1:
+        return 0.0
+    theta = np.linspace(0.0, np.pi / 2, 4097)
+    w = np.cos(theta) ** (draws - 1)
+    cdf = np.concatenate([[0.0], np.cumsum((w[1:] + w[:-1]) / 2)])
+    return float(np.sqrt(draws) * np.tan(np.interp(min(level, 0.9999) * cdf[-1], cdf, theta)))
 
 
 def reject_distances(group: Group, members: list) -> np.ndarray:
@@ -391,10 +433,12 @@ def reject_distances(group: Group, members: list) -> np.ndarray:
 
     The spread: each example's distance to the nearest of the others (leave one out) is
     taken as a draw from a half-normal — a performance's deviation from a template as
-    noise — whose 95 % quantile (:data:`SPREAD_Z` × their root mean square) bounds a new
-    performance; never less than the largest of them. The largest of three alone would
-    reject a quarter of new performances like them (a fourth draw exceeds the largest of
-    three with probability ¼), and more from a person the examples did not come from."""
+    noise — and a new performance bounded where it falls with probability :data:`SPREAD`
+    (95 %): their root mean square times :func:`prediction_bound` (3.18 for three
+    examples, the variance being estimated from three draws); never less than the largest
+    of them. The largest of three alone would reject a quarter of new performances like
+    them (a fourth draw exceeds the largest of three with probability ¼), and more from a
+    person the examples did not come from."""
     pieces = []  # (paths (T, n, 3), quats or None) of every example
     for _, _, paths, quats in members:
         pieces += [(paths[j], None if quats is None else quats[j]) for j in range(len(paths))]
@@ -422,7 +466,7 @@ def reject_distances(group: Group, members: list) -> np.ndarray:
             spread = 0.0
         else:
             loo = [float(dtw_costs(own[j], np.delete(own, j, axis=0)).min()) for j in range(len(own))]
-            spread = max(max(loo), SPREAD_Z * float(np.sqrt(np.mean(np.square(loo)))))
+            spread = max(max(loo), prediction_bound(SPREAD, len(loo)) * float(np.sqrt(np.mean(np.square(loo)))))
         if near is None:
             out.append(2.0 * spread)
             continue
