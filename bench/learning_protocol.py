@@ -325,7 +325,7 @@ def _report(users, figures, base, sweeps, product) -> None:
             for name in GRID:
                 if any(k[0] == name for k in sweeps if isinstance(k, tuple)):
                     held = _held_out(users, sweeps, name, metric, product)
-                    print(f"      {name} held out    " + "  ".join(f"{held[u][1]:5.3f}" for u in users)
+                    print(f"      {name + ' held out':<18}  " + "  ".join(f"{held[u][1]:5.3f}" for u in users)
                           + f"  mean {np.mean([held[u][1] for u in users]):.3f}; chosen "
                           + ", ".join(f"{held[u][0]:g}" for u in users) + f" (product {product[name]:g})")
             print("      DTW 1-NN            " + "  ".join(f"{base[metric, u]:5.3f}" for u in users))
@@ -341,7 +341,7 @@ def _report(users, figures, base, sweeps, product) -> None:
             for name in GRID:
                 if any(k[0] == name for k in sweeps if isinstance(k, tuple)):
                     held = _held_out(users, sweeps, name, metric, product)
-                    print(f"      {name} held out        " + "  ".join(f"{f1([held[u][1]]):5.3f}" for u in users)
+                    print(f"      {name + ' held out':<22}  " + "  ".join(f"{f1([held[u][1]]):5.3f}" for u in users)
                           + f"  F1 {f1([held[u][1] for u in users]):.3f}; chosen "
                           + ", ".join(f"{held[u][0]:g}" for u in users))
 
