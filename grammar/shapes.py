@@ -11,9 +11,8 @@ of the step and how the controller has turned (weighted by :data:`TURN`, unless 
 library's own examples show another weight clearly better, :func:`choose_turn`), in the
 room's frame — a performer faces the table, so left and right mean something, and how the
 hand turns tells one person's uppercut from their hook; the turn is read relative to the
-window, so however each person
-holds the controller, the same hand movement reads the same. The shape distance of a performance to an
-action is the smallest DTW cost between its features and an example's, per step. It ranks
+window, so however each person holds the controller, the same hand movement reads the
+same. The shape distance of a performance to an action is the smallest DTW cost between its features and an example's, per step. It ranks
 the actions whose expressions the Matcher found: ``edits +`` :data:`WEIGHT` ``× shape
 distance``; an action is rejected past a distance derived from its examples
 (:func:`reject_distances`). Of the windows around a segment, the one explaining the motion
