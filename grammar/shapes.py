@@ -387,8 +387,6 @@ def choose_turn(shapes: list, owner: np.ndarray) -> float:
         reads[turn] = np.array(right)
         keys[turn] = (int(np.sum(right)), float(np.mean(np.log(ratios))) if ratios else 0.0)
     others = [turn for turn in reads if turn != TURN]
-    if not others:
-        return TURN
     best = max(others, key=lambda turn: keys[turn])
     gained = int(np.sum(reads[best] & ~reads[TURN]))
     lost = int(np.sum(reads[TURN] & ~reads[best]))
