@@ -187,8 +187,10 @@ def stream(pieces, rng, idle: bool, rate: float = 90.0):
 
 def stream_counts(doodle, spans, found) -> tuple[int, int, int]:
     """(true positives, detections, truths): a detection counts when its name is right and
-    it overlaps a true gesture not yet counted."""
+    it overlaps a true gesture not yet counted. Idle (the built-in pause, when the built-in
+    actions are loaded) is not a detection: the stream's idle stretches are pauses."""
     t = doodle.t
+    found = [f for f in found if f[0] != "Idle"]
     used, tp = set(), 0
     for name, a, b in found:
         t0, t1 = t[a], t[min(b, len(t) - 1)]
@@ -206,16 +208,18 @@ def f1(counts) -> float:
     return 2 * p * r / max(p + r, 1e-9)
 
 
-def evaluate(data, users, classes, folders, streams) -> dict:
+def evaluate(data, users, classes, folders, streams, builtin: bool = False) -> dict:
     """Per (metric, user): the figure with the recogniser's constants as they are now.
-    Metrics: ("dep"|"indep", tracks) isolated accuracy; ("stream", idle, tracks) counts."""
+    Metrics: ("dep"|"indep", tracks) isolated accuracy; ("stream", idle, tracks) counts.
+    With ``builtin``, the built-in actions are loaded beside the learned ones (``doodle
+    recognize --library DIR`` without ``--no-builtin``)."""
     from grammar.recognizer import load_actions
 
     out = {}
     for tracks in SETTINGS:
         for kind in ("dep", "indep"):
             for user in users:
-                compiled = load_actions(folders[(kind, user, tracks)], False)
+                compiled = load_actions(folders[(kind, user, tracks)], builtin)
                 right = [answer(d, compiled, tracks) == g for g in classes for d in data[user][g][3:5]]
                 out[(kind, tracks), user] = float(np.mean(right))
                 if kind == "dep":
@@ -278,6 +282,7 @@ def main(quick: bool = False, full: bool = False) -> None:
             if quick:
                 break
         figures = sweeps.get("figures") or evaluate(data, users, classes, folders, streams)
+        beside = evaluate(data, users, classes, folders, streams, builtin=True)
         base = {}
         for tracks in SETTINGS:
             for user in users:
@@ -289,6 +294,7 @@ def main(quick: bool = False, full: bool = False) -> None:
                 base[("dep", tracks), user] = float(np.mean([a == b for a, b in zip(dep, truth)]))
                 base[("indep", tracks), user] = float(np.mean([a == b for a, b in zip(ind, truth)]))
     _report(users, figures, base, sweeps, product)
+    _report_beside(users, figures, beside)
     print(f"  ({time.perf_counter() - began:.0f} s)")
 
 
@@ -344,6 +350,26 @@ def _report(users, figures, base, sweeps, product) -> None:
                     print(f"      {name + ' held out':<22}  " + "  ".join(f"{f1([held[u][1]]):5.3f}" for u in users)
                           + f"  F1 {f1([held[u][1] for u in users]):.3f}; chosen "
                           + ", ".join(f"{held[u][0]:g}" for u in users))
+
+
+def _report_beside(users, figures, beside) -> None:
+    """The same libraries read with the built-in actions beside the learned ones, as
+    ``doodle recognize --library DIR`` loads them by default (in-sample constants)."""
+    print("  with the built-in actions beside the learned ones (`doodle recognize --library DIR`, the default; "
+          "in-sample constants):")
+    for kind, label in (("dep", "user-dependent"), ("indep", "user-independent")):
+        for tracks in SETTINGS:
+            metric = (kind, tracks)
+            print(f"      {label + ', ' + '+'.join(tracks):<28} accuracy "
+                  f"{np.mean([beside[metric, u] for u in users]):.3f} "
+                  f"(learned alone {np.mean([figures[metric, u] for u in users]):.3f}); per user "
+                  + " ".join(f"{beside[metric, u]:.3f}" for u in users))
+    for tracks in SETTINGS:
+        for idle in (True, False):
+            metric = ("stream", idle, tracks)
+            print(f"      continuous, {'+'.join(tracks):<5} {'idle between' if idle else 'back to back':<12}   F1 "
+                  f"{f1([beside[metric, u] for u in users]):.3f} "
+                  f"(learned alone {f1([figures[metric, u] for u in users]):.3f})")
 
 
 def all_splits() -> dict:

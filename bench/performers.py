@@ -132,6 +132,58 @@ def held_out(compiled) -> tuple[float, float]:
     return rate(ours), rate(raw)
 
 
+def _beside_one(job) -> tuple[str, list, list, Counter]:
+    """The scenes of :func:`beside_learned` read with one user's learned library beside the
+    built-in actions, and with the built-in actions alone (run in a worker process)."""
+    import tempfile
+
+    from bench.learning_protocol import load as load_vive, make_library
+
+    user, scenes = job
+    data = load_vive()[user]
+    with tempfile.TemporaryDirectory() as tmp:
+        folder = make_library(Path(tmp) / user, {g: ds[:3] for g, ds in sorted(data.items())}, ("c0",))
+        learned, alone = load_actions(folder, True), load_actions()
+        names = set(data)
+        beside, without, taken = [], [], Counter()
+        for actions, style, seed in scenes:
+            doodle, _ = perform(actions, style, seed)
+            want = [a for a in actions if a != "Idle"]
+            for compiled, into in ((learned, beside), (alone, without)):
+                got = [s.action for s in recognize(doodle, compiled)["c0"][1] if s.action != "Idle"]
+                into.append(got == want)
+                if compiled is learned:
+                    taken.update((g, " ".join(want)) for g in got if g in names)
+    return user, beside, without, taken
+
+
+def beside_learned() -> None:
+    """Built-in actions performed with a user library beside them: each of the five Vive
+    users' gestures learned on c0 from ex_0..2 (``bench.learning_protocol``), the main
+    example and every built-in action alone and inside a sequence, one take per style —
+    read as ``doodle recognize --library DIR`` reads them (learned and built-in actions
+    together), beside the built-in actions alone on the same scenes."""
+    from bench.learning_protocol import ROOT
+
+    if not sorted(ROOT.glob("*/*/*.csv")):
+        print(f"  beside a learned library: no Vive recordings under {ROOT} (skipped)")
+        return
+    users = sorted(p.name for p in ROOT.iterdir() if p.is_dir())
+    scenes = [(MAIN_EXAMPLE, style, 300 + k) for k, style in enumerate(style_grid())]
+    scenes += [(("Idle", a, "Idle"), style, 400 + k) for k, style in enumerate(style_grid()) for a in ACTIONS]
+    scenes += [(("Idle", "Walk", a, "Side Walk Left", "Idle"), style, 500 + k)
+               for k, style in enumerate(style_grid()) for a in ACTIONS]
+    with ProcessPoolExecutor(max_workers=2) as pool:
+        rows = list(pool.map(_beside_one, [(u, scenes) for u in users]))
+    print(f"  beside a learned library (each Vive user's gestures learned on c0; "
+          f"{len(scenes)} scenes: the main example and every action alone and in a sequence, one take per style): "
+          f"exact per user, beside the built-in actions alone")
+    for user, beside, without, taken in rows:
+        common = ", ".join(f"{g} in {what} ×{n}" for (g, what), n in taken.most_common(3))
+        print(f"    {user.replace('Sub_', ''):<6} {rate(beside):.3f} (alone {rate(without):.3f}); "
+              f"scenes given a learned name: {sum(taken.values())}" + (f" ({common})" if common else ""))
+
+
 def main(quick: bool = False) -> dict:
     styles = style_grid()
     takes_main, takes_action = (2, 1) if quick else (3, 2)
@@ -166,6 +218,8 @@ def main(quick: bool = False) -> dict:
     ours, raw = held_out(load_actions())
     print(f"  held out — the same performer with settings not looked at while choosing the constants (60/120 Hz, "
           f"±25 % variation, 1 mm tremor, 1 cm drift, 3–4.6° wobble): exact {ours:.3f}; without the stage: {raw:.3f}")
+    if not quick:
+        beside_learned()
     print("  most common misreadings:")
     for (what, got), n in (misread + stroke_misread).most_common(10):
         print(f"    ×{n}  {what} → {got or '(nothing)'}")

@@ -557,8 +557,8 @@ class Refiner:
         if first.action == UNKNOWN and first.stop - max(first.first, self._done) >= SPOT_TOKENS:
             # spotted in only if its motion does not go on into the next segment: wait for that
             return len(self._waiting) >= 2 and len(self.tokens) > first.stop
-        if first.action not in self.shapes.names:
-            return True
+        if first.action not in self.shapes.names:  # a built-in: its motion's end decides whether a learned one fits it
+            return not self._moving(first) or self._motion(first, len(self.tokens), False) != "pending"
         if len(self._waiting) < 2:  # the next segment decides how far a window may reach
             return False
         after = self._waiting[1]
@@ -615,7 +615,10 @@ class Refiner:
                     return self._both(two, first, seg.stop, known)
                 found = self._spots(first, seg.stop, known)
         else:
-            return self._emit(seg.action, first, seg.stop, seg.exact, seg.distance)
+            best = self._over_builtin(seg, first, known, closed)
+            if best is None:
+                return self._emit(seg.action, first, seg.stop, seg.exact, seg.distance)
+            found = [best]
         if not found:
             return self._spot_pending(first, known) + self._emit(UNKNOWN, first, seg.stop, False, None)
         f = found[0][0]
@@ -623,6 +626,41 @@ class Refiner:
             self._take_back(f)
         self._emit(UNKNOWN, first, f, False, None)  # what it gives up joins the pending run (emits nothing)
         return self._spot_pending(min(f, first), known) + self._emit_found(found, seg.stop)
+
+    def _moving(self, seg) -> bool:
+        """Whether a segment of a built-in action (one without shapes; not unknown) holds
+        movement a learned action could be (not a pause, not decided already), on a track
+        learned actions are read on."""
+        from grammar.matcher import UNKNOWN
+
+        return seg.action != UNKNOWN and bool(self._allowed.any()) and any(
+            self.tokens[i].name != "T_STILL" for i in range(max(seg.first, self._done), seg.stop))
+
+    def _over_builtin(self, seg, first: int, known: int, closed: bool):
+        """A learned action read over the motion a segment of an action without shapes lies
+        in (``(first, stop, action, edits)``), or None: the window of :meth:`_best` from
+        within :data:`TRIM` tokens of the motion's start to within as many of its end, when
+        it fits. The Matcher reads a learned gesture's tokens — a new performance's, 5 to 10
+        edits from its examples' — as the few-token expressions of built-in actions as
+        readily as its own (a cartwheel as Dodge then Block, a hook as Walk Back then Side
+        Walk Right): the tokens cannot tell them apart, and built-in actions have no shapes
+        to. A motion between pauses that the Matcher read in pieces — several segments, or
+        one with unknown tokens beside it — and that a learned action's shape fits whole,
+        within its rejection distance and its examples' durations, is that action, the one
+        the user taught. A motion read whole as one built-in action stays that action: a
+        learned gesture that hardly moves this hand has a loose rejection distance, and
+        would otherwise take built-in actions performed cleanly."""
+        if not self._moving(seg):
+            return None
+        motion = self._motion(seg, known, closed)
+        if motion is None or motion == "pending" or motion[1] - motion[0] < SPOT_TOKENS:
+            return None
+        a, b = motion
+        moving = [i for i in range(first, seg.stop) if self.tokens[i].name != "T_STILL"]
+        if (moving[0], moving[-1] + 1) == (a, b):  # the motion is this action's, whole
+            return None
+        return self._best(range(a, min(b, a + TRIM + 1)), [(max(a + 1, b - TRIM), b)], known, motion=motion,
+                          across=False)
 
     def _emit_found(self, found: list, stop: int) -> list:
         """Learned actions found in order ``[(first, stop, action, edits), …]`` emitted, the

@@ -294,10 +294,43 @@ def test_the_whole_motion_wins_over_a_part_nearer_another_gesture(tmp_path):
         assert longest.end - longest.start > 0.6 * len(doodle.t)
 
 
-@pytest.mark.parametrize("idle", [True, False])
-def test_streaming_refiner_equals_batch_across_gestures(tmp_path, idle):
-    """Several performances in one stream, with pauses between them or back to back: the
-    Refiner waits until the motion a segment lies in has ended, so live equals batch."""
+def test_learned_gestures_read_as_built_in_pieces_are_the_learned_ones(tmp_path):
+    """Sub_U001's held-out takes with the built-in actions beside the learned ones (what
+    ``doodle recognize --library DIR`` loads): the Matcher reads some as pieces of built-in
+    actions (a cartwheel as Dodge then Block, an uppercut as Punch then Walk Back); the
+    motion between the pauses fits the learned action's shape, so it is that action."""
+    from doodle.input.loader import load
+    from grammar.recognizer import load_actions, recognize
+
+    gestures = ["cartwheel_right", "hook_right", "uppercut_left", "uppercut_right"]
+    lib, files = _learn_all(tmp_path, gestures)
+    compiled = load_actions(lib, True)
+    for g in gestures:
+        for path in files[g][3:]:
+            doodle = load(path, convention="unity").select(["c0"])
+            assert [s.action for s in recognize(doodle, compiled)["c0"][1] if s.action not in ("unknown", "Idle")] == [g]
+
+
+def test_built_in_actions_performed_whole_stay_built_in_beside_learned_ones(tmp_path):
+    """Sub_U007's left hook hardly moves the right controller (c0), so its rejection
+    distance is loose: read over any motion it would take built-in actions. A motion the
+    Matcher reads whole as one built-in action stays that action."""
+    from doodle.synth.performers import perform, style_grid
+    from grammar.recognizer import load_actions, recognize
+
+    lib, _ = _learn_all(tmp_path, ["hook_left"], "Sub_U007")
+    compiled = load_actions(lib, True)
+    for action in ("Pick up", "Dance", "Raise Arms"):
+        for seed, style in enumerate(style_grid()[:6]):
+            doodle, _ = perform(("Idle", action, "Idle"), style, seed)
+            assert [s.action for s in recognize(doodle, compiled)["c0"][1] if s.action != "Idle"] == [action]
+
+
+@pytest.mark.parametrize("idle,builtin", [(True, False), (False, False), (True, True)])
+def test_streaming_refiner_equals_batch_across_gestures(tmp_path, idle, builtin):
+    """Several performances in one stream, with pauses between them or back to back (and
+    with the built-in actions beside the learned ones): the Refiner waits until the motion
+    a segment lies in has ended, so live equals batch."""
     from bench.learning_protocol import stream
     from doodle.app.replay import replay
     from doodle.input.loader import load
@@ -305,7 +338,7 @@ def test_streaming_refiner_equals_batch_across_gestures(tmp_path, idle):
 
     gestures = ["hook_left", "hook_right", "golf_swing", "uppercut_left"]
     lib, files = _learn_all(tmp_path, gestures)
-    compiled = load_actions(lib, False)
+    compiled = load_actions(lib, builtin)
     pieces = [(g, load(files[g][k], convention="unity").select(["c0"])) for g in gestures for k in (3, 4)]
     doodle, spans = stream(pieces, np.random.default_rng(1), idle)
     found = replay(doodle, compiled).found
