@@ -18,7 +18,8 @@ distance``; an action is rejected past a distance derived from its examples
 (:func:`reject_distances`). Of the windows around a segment, the one explaining the motion
 between the pauses best wins — the whole motion whenever it fits an action —, and a window
 leaving part of it out pays for that part at the action's rejection distance (:class:`Refiner`); a
-motion that two learned gestures fit better than one is read as both, back to back.
+motion that two learned gestures fit better than one is read as both, back to back; one
+the Matcher read as pieces of built-in actions is the learned action that fits it whole.
 
 DTW costs of one performance against every template are computed at once (one row
 recurrence vectorised over templates), about 0.2 ms for 33 templates of 31 steps.
@@ -509,8 +510,11 @@ class Refiner:
     ending at a pause — and every learned action that fits within :data:`SPOT` of its
     rejection distance is reported, the best first, then the rest of the run on either side
     searched again (:meth:`_spots`). Other segments pass through
-    (less any tokens taken). A shaped segment is decided once the pause ending its motion
-    is known (or :data:`SPOT_MAX` tokens have passed without one). An unknown run whose
+    (less any tokens taken) — but a built-in action's segment in a motion the Matcher read
+    in pieces is the learned action that fits the whole motion, if one does
+    (:meth:`_over_builtin`); it too waits for the pause ending its motion. A shaped
+    segment is decided once the pause ending its motion is known (or :data:`SPOT_MAX`
+    tokens have passed without one). An unknown run whose
     motion goes on, without a pause, into a shaped segment is not searched: it waits, and
     that segment's windows may take its tokens back (a gesture the Matcher found only the
     end of is read whole, not as two). Whatever unknown run lies before a shaped segment once
