@@ -33,7 +33,8 @@ Protocol (the one someone with new users would run):
   examples of the five (ten per user), the other two tested; user-independent: ex_k of the
   next three users for k = 0..4, all five of the user's examples tested; continuous: one
   stream per user-dependent split of its held-out recordings. The constants are not held out
-  there (they were chosen on these users); only the training examples are.
+  there (they were chosen on these users); only the training examples are. With
+  ``--all-splits --builtin``, the same with the built-in actions loaded beside the learned ones.
 """
 
 from __future__ import annotations
@@ -372,11 +373,12 @@ def _report_beside(users, figures, beside) -> None:
                   f"(learned alone {f1([figures[metric, u] for u in users]):.3f})")
 
 
-def all_splits() -> dict:
+def all_splits(builtin: bool = False) -> dict:
     """The figures on every split, with the product's constants (see the module's
     docstring), beside DTW 1-NN on the same splits; printed per user, and returned as
     ``{(metric, user): [right or counts, …]}`` (metrics as :func:`evaluate`'s, plus
-    ``("dtw", kind, tracks)``)."""
+    ``("dtw", kind, tracks)``). With ``builtin`` (``--all-splits --builtin``) the built-in
+    actions are loaded beside the learned ones, as ``doodle recognize --library DIR`` does."""
     import itertools
 
     from grammar.recognizer import load_actions
@@ -399,7 +401,8 @@ def all_splits() -> dict:
                 splits += [("indep", {g: [data[u][g][k] for u in _others(users, user)] for g in classes},
                             [(g, d) for g in classes for d in data[user][g][:5]]) for k in range(5)]
                 for n, (kind, train, tests) in enumerate(splits):
-                    compiled = load_actions(make_library(Path(tmp) / f"{user}-{len(tracks)}-{n}", train, tracks), False)
+                    compiled = load_actions(make_library(Path(tmp) / f"{user}-{len(tracks)}-{n}", train, tracks),
+                                            builtin)
                     out[(kind, tracks), user] += [answer(d, compiled, tracks) == g for g, d in tests]
                     out[("dtw", kind, tracks), user] += [a == g for (g, _), a in
                                                          zip(tests, baseline(train, [d for _, d in tests], tracks))]
@@ -409,7 +412,8 @@ def all_splits() -> dict:
                             out[("stream", idle, tracks), user].append(
                                 stream_counts(doodle, spans, answers(doodle, compiled, tracks)))
     short = "  ".join(f"{u.replace('Sub_', ''):>5}" for u in users)
-    print(f"Learned gestures on every split, product constants (in-sample for them; {len(users)} users)")
+    print(f"Learned gestures on every split, product constants (in-sample for them; {len(users)} users"
+          + ("; the built-in actions loaded beside them)" if builtin else ")"))
     for kind, label in (("dep", "user-dependent, 10 splits"), ("indep", "user-independent, 5 splits")):
         for tracks in SETTINGS:
             ours, dtw = ([out[(m, user)] for user in users] for m in ((kind, tracks), ("dtw", kind, tracks)))
@@ -432,6 +436,6 @@ if __name__ == "__main__":
     import sys
 
     if "--all-splits" in sys.argv:
-        all_splits()
+        all_splits(builtin="--builtin" in sys.argv)
     else:
         main(quick="--quick" in sys.argv, full="--full" in sys.argv)

@@ -19,7 +19,8 @@ distance``; an action is rejected past a distance derived from its examples
 between the pauses best wins — the whole motion whenever it fits an action —, and a window
 leaving part of it out pays for that part at the action's rejection distance (:class:`Refiner`); a
 motion that two learned gestures fit better than one is read as both, back to back; one
-the Matcher read as pieces of built-in actions is the learned action that fits it whole.
+the Matcher read as pieces of built-in actions is the learned action that fits it whole —
+or, where gestures follow each other without a pause, that fits those pieces together.
 
 DTW costs of one performance against every template are computed at once (one row
 recurrence vectorised over templates), about 0.2 ms for 33 templates of 31 steps.
@@ -511,8 +512,10 @@ class Refiner:
     rejection distance is reported, the best first, then the rest of the run on either side
     searched again (:meth:`_spots`). Other segments pass through
     (less any tokens taken) — but a built-in action's segment in a motion the Matcher read
-    in pieces is the learned action that fits the whole motion, if one does
-    (:meth:`_over_builtin`); it too waits for the pause ending its motion. A shaped
+    in pieces is the learned action that fits the whole motion, if one does, or else the
+    one that fits the segment with the pieces beside it, cutting no other built-in segment
+    (:meth:`_over_builtin`, :meth:`_among_pieces`); it waits for the pause ending its motion
+    and for the Matcher's segments as far as such a window may reach. A shaped
     segment is decided once the pause ending its motion is known (or :data:`SPOT_MAX`
     tokens have passed without one). An unknown run whose
     motion goes on, without a pause, into a shaped segment is not searched: it waits, and
@@ -562,7 +565,12 @@ class Refiner:
             # spotted in only if its motion does not go on into the next segment: wait for that
             return len(self._waiting) >= 2 and len(self.tokens) > first.stop
         if first.action not in self.shapes.names:  # a built-in: its motion's end decides whether a learned one fits it
-            return not self._moving(first) or self._motion(first, len(self.tokens), False) != "pending"
+            if not self._moving(first):
+                return True
+            if self._motion(first, len(self.tokens), False) == "pending":
+                return False
+            b = self._pieces_end(first, len(self.tokens))  # the Matcher's segments as far as a gesture may reach
+            return b <= first.stop or any(w.stop >= b or w.action in self.shapes.names for w in self._waiting[1:])
         if len(self._waiting) < 2:  # the next segment decides how far a window may reach
             return False
         after = self._waiting[1]
@@ -653,18 +661,57 @@ class Refiner:
         within its rejection distance and its examples' durations, is that action, the one
         the user taught. A motion read whole as one built-in action stays that action: a
         learned gesture that hardly moves this hand has a loose rejection distance, and
-        would otherwise take built-in actions performed cleanly."""
+        would otherwise take built-in actions performed cleanly. A motion that no learned
+        action fits whole — no pause bounds it (back to back), or it holds more than one
+        gesture — is searched around the segment instead (:meth:`_among_pieces`)."""
         if not self._moving(seg):
             return None
         motion = self._motion(seg, known, closed)
-        if motion is None or motion == "pending" or motion[1] - motion[0] < SPOT_TOKENS:
+        if motion is None:
+            return self._among_pieces(seg, first, known)
+        if motion == "pending" or motion[1] - motion[0] < SPOT_TOKENS:
             return None
         a, b = motion
         moving = [i for i in range(first, seg.stop) if self.tokens[i].name != "T_STILL"]
         if (moving[0], moving[-1] + 1) == (a, b):  # the motion is this action's, whole
             return None
-        return self._best(range(a, min(b, a + TRIM + 1)), [(max(a + 1, b - TRIM), b)], known, motion=motion,
-                          across=False)
+        whole = self._best(range(a, min(b, a + TRIM + 1)), [(max(a + 1, b - TRIM), b)], known, motion=motion,
+                           across=False)
+        return whole if whole is not None else self._among_pieces(seg, first, known)
+
+    def _pieces_end(self, seg, known: int) -> int:
+        """Where a window of :meth:`_among_pieces` around a built-in segment may end at the
+        latest: :data:`SPOT_MAX` tokens from where it may start, or the first pause after
+        the segment."""
+        first = max(seg.first, self._done)
+        pending = self._unknown is not None and self._unknown.stop == first
+        a = max(self._unknown.first, seg.first - UNKNOWN_REACH) if pending else first
+        b = min(known, a + SPOT_MAX)
+        return next((i for i in range(seg.stop, b) if self.tokens[i].name == "T_STILL"), b)
+
+    def _among_pieces(self, seg, first: int, known: int):
+        """A learned action read over a built-in segment and the pieces beside it, or None:
+        the best window (:meth:`_best`) that holds the segment whole — starting at it or up
+        to :data:`UNKNOWN_REACH` tokens into the unknown run before it, ending at its end or
+        further, at the end of a following built-in segment or within a following unknown
+        run, short of the next pause and the next learned segment — other than the segment
+        alone. Where gestures follow each other without a pause no motion bounds one, and
+        the Matcher reads a learned gesture's tokens as pieces as readily (built-in segments
+        with unknown tokens between, each run too short to search; a hook as Cast Fireball
+        with a few unknown tokens after it); a window that cuts no built-in segment and
+        holds more than the one is read as the learned action it fits. The segment alone
+        stays the built-in action, as a motion read whole does (:meth:`_over_builtin`)."""
+        from grammar.matcher import UNKNOWN
+
+        pending = self._unknown is not None and self._unknown.stop == first
+        a = max(self._unknown.first, seg.first - UNKNOWN_REACH) if pending else first
+        b = self._pieces_end(seg, known)
+        ends = [(seg.stop, seg.stop)]
+        for w in self._waiting:  # the segments after it, as far as b: a window ends within an unknown run or at a
+            if w.first >= b or w.action in self.shapes.names or (w.action != UNKNOWN and w.stop > b):  # built-in's end
+                break
+            ends.append((w.first, min(w.stop, b)) if w.action == UNKNOWN else (w.stop, w.stop))
+        return self._best(range(a, first + 1), ends, known, across=False, without=(first, seg.stop))
 
     def _emit_found(self, found: list, stop: int) -> list:
         """Learned actions found in order ``[(first, stop, action, edits), …]`` emitted, the
@@ -849,7 +896,8 @@ class Refiner:
         bounds = [self.tokens[k].start - s0 for k in range(a, b)] + [s1 - 1 - s0]
         return cum[np.clip(bounds, 0, len(cum) - 1)]
 
-    def _best(self, starts, ends: list, known: int, strict: float = 1.0, motion=None, across: bool = True):
+    def _best(self, starts, ends: list, known: int, strict: float = 1.0, motion=None, across: bool = True,
+              without=None):
         """The best (first, stop, action, edits) over windows starting in ``starts`` and
         ending in one of the ``ends`` intervals, or None when its shape distance is over
         ``strict`` × the action's rejection distance. With ``motion`` (tokens a..b between
@@ -876,7 +924,7 @@ class Refiner:
                 d = auto.step(d, CODES[names[e - 1]])
                 if not across and names[e - 1] == "T_STILL":
                     break
-                if not any(lo <= e <= hi for lo, hi in ends) or names[e - 1] == "T_STILL":
+                if not any(lo <= e <= hi for lo, hi in ends) or names[e - 1] == "T_STILL" or (f, e) == without:
                     continue
                 a, b = self.tokens[f].start, self.tokens[e - 1].end
                 if int(self.valid[a:b].sum()) >= 3:

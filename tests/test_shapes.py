@@ -326,7 +326,29 @@ def test_built_in_actions_performed_whole_stay_built_in_beside_learned_ones(tmp_
             assert [s.action for s in recognize(doodle, compiled)["c0"][1] if s.action != "Idle"] == [action]
 
 
-@pytest.mark.parametrize("idle,builtin", [(True, False), (False, False), (True, True)])
+def test_learned_gestures_back_to_back_beside_built_in_ones(tmp_path):
+    """Sub_U005's held-out takes back to back, with the built-in actions beside the learned
+    ones: with no pause to bound a motion, the Matcher read a combo as Cast Fireball, Side
+    Walk Left, Walk Back and Dodge, and the end of a fly_eagle with an uppercut as Cast
+    Fireball. A window that holds a built-in segment and more, cutting no other, and fits
+    a learned action is that action: all three gestures of each stream are read, in order."""
+    from bench.learning_protocol import stream
+    from doodle.input.loader import load
+    from grammar.recognizer import load_actions, recognize
+
+    gestures = ["backflip", "cartwheel_left", "cartwheel_right", "fly_eagle", "golf_swing", "hook_left", "hook_right",
+                "left_right_left_combo", "right_left_right_combo", "uppercut_left", "uppercut_right"]
+    lib, files = _learn_all(tmp_path, gestures, "Sub_U005")
+    compiled = load_actions(lib, True)
+    for takes in ((("right_left_right_combo", 4), ("cartwheel_right", 4), ("hook_right", 4)),
+                  (("fly_eagle", 3), ("hook_right", 4), ("uppercut_right", 4))):
+        pieces = [(g, load(files[g][k], convention="unity").select(["c0"])) for g, k in takes]
+        doodle, spans = stream(pieces, np.random.default_rng(0), False)
+        named = [s.action for s in recognize(doodle, compiled)["c0"][1] if s.action not in ("unknown", "Idle")]
+        assert named == [g for g, _, _ in spans]
+
+
+@pytest.mark.parametrize("idle,builtin", [(True, False), (False, False), (True, True), (False, True)])
 def test_streaming_refiner_equals_batch_across_gestures(tmp_path, idle, builtin):
     """Several performances in one stream, with pauses between them or back to back (and
     with the built-in actions beside the learned ones): the Refiner waits until the motion
