@@ -569,8 +569,7 @@ class Refiner:
                 return True
             if self._motion(first, len(self.tokens), False) == "pending":
                 return False
-            b = self._pieces_end(first, len(self.tokens))  # the Matcher's segments as far as a gesture may reach
-            return b <= first.stop or any(w.stop >= b or w.action in self.shapes.names for w in self._waiting[1:])
+            return self._pieces(first, self._waiting[1:], len(self.tokens), False) is not None
         if len(self._waiting) < 2:  # the next segment decides how far a window may reach
             return False
         after = self._waiting[1]
@@ -679,39 +678,48 @@ class Refiner:
                            across=False)
         return whole if whole is not None else self._among_pieces(seg, first, known)
 
-    def _pieces_end(self, seg, known: int) -> int:
-        """Where a window of :meth:`_among_pieces` around a built-in segment may end at the
-        latest: :data:`SPOT_MAX` tokens from where it may start, or the first pause after
-        the segment."""
+    def _pieces(self, seg, after: list, known: int, closed: bool):
+        """The windows :meth:`_among_pieces` reads around a built-in segment, ``(starts,
+        ends)`` as :meth:`_best` takes them, given the segments ``after`` it — or None while
+        the Matcher's segments or the tokens do not reach as far as they may (not yet
+        ``closed``). A window starts at the segment or up to :data:`UNKNOWN_REACH` tokens
+        into the unknown run before it; it ends at the segment's end, within a following
+        unknown run or at a following built-in segment's end — cutting none, short of the
+        first pause after the segment and of :data:`SPOT_MAX` tokens from its start — or,
+        where the next learned segment begins within that, about where that one ends
+        (within :data:`TRIM` before to :data:`REACH` after: the Matcher may read a learned
+        gesture's start as a built-in piece)."""
+        from grammar.matcher import UNKNOWN
+
         first = max(seg.first, self._done)
         pending = self._unknown is not None and self._unknown.stop == first
         a = max(self._unknown.first, seg.first - UNKNOWN_REACH) if pending else first
         b = min(known, a + SPOT_MAX)
-        return next((i for i in range(seg.stop, b) if self.tokens[i].name == "T_STILL"), b)
+        b = next((i for i in range(seg.stop, b) if self.tokens[i].name == "T_STILL"), b)
+        ends = [(seg.stop, seg.stop)]
+        for w in after:
+            if w.first >= b or (w.action not in self.shapes.names and w.action != UNKNOWN and w.stop > b):
+                return range(a, first + 1), ends
+            if w.action in self.shapes.names:
+                if known < w.stop + REACH and not closed:
+                    return None
+                return range(a, first + 1), ends + [(w.stop - TRIM, w.stop + REACH)]
+            ends.append((w.first, min(w.stop, b)) if w.action == UNKNOWN else (w.stop, w.stop))
+        return (range(a, first + 1), ends) if closed or b <= seg.stop else None
 
     def _among_pieces(self, seg, first: int, known: int):
         """A learned action read over a built-in segment and the pieces beside it, or None:
-        the best window (:meth:`_best`) that holds the segment whole — starting at it or up
-        to :data:`UNKNOWN_REACH` tokens into the unknown run before it, ending at its end or
-        further, at the end of a following built-in segment or within a following unknown
-        run, short of the next pause and the next learned segment — other than the segment
-        alone. Where gestures follow each other without a pause no motion bounds one, and
-        the Matcher reads a learned gesture's tokens as pieces as readily (built-in segments
-        with unknown tokens between, each run too short to search; a hook as Cast Fireball
-        with a few unknown tokens after it); a window that cuts no built-in segment and
-        holds more than the one is read as the learned action it fits. The segment alone
-        stays the built-in action, as a motion read whole does (:meth:`_over_builtin`)."""
-        from grammar.matcher import UNKNOWN
-
-        pending = self._unknown is not None and self._unknown.stop == first
-        a = max(self._unknown.first, seg.first - UNKNOWN_REACH) if pending else first
-        b = self._pieces_end(seg, known)
-        ends = [(seg.stop, seg.stop)]
-        for w in self._waiting:  # the segments after it, as far as b: a window ends within an unknown run or at a
-            if w.first >= b or w.action in self.shapes.names or (w.action != UNKNOWN and w.stop > b):  # built-in's end
-                break
-            ends.append((w.first, min(w.stop, b)) if w.action == UNKNOWN else (w.stop, w.stop))
-        return self._best(range(a, first + 1), ends, known, across=False, without=(first, seg.stop))
+        the best window (:meth:`_best`) of :meth:`_pieces` — one that holds the segment
+        whole and cuts no other built-in one — other than the segment alone. Where gestures
+        follow each other without a pause no motion bounds one, and the Matcher reads a
+        learned gesture's tokens as pieces as readily (built-in segments with unknown tokens
+        between, each run too short to search; a hook as Cast Fireball with a few unknown
+        tokens after it; an uppercut's start as Walk Back, its rest as the uppercut); a
+        window that holds more than the one segment is read as the learned action it fits.
+        The segment alone stays the built-in action, as a motion read whole does
+        (:meth:`_over_builtin`)."""
+        starts, ends = self._pieces(seg, self._waiting, known, True)
+        return self._best(starts, ends, known, across=False, without=(first, seg.stop))
 
     def _emit_found(self, found: list, stop: int) -> list:
         """Learned actions found in order ``[(first, stop, action, edits), …]`` emitted, the
