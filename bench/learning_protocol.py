@@ -21,8 +21,8 @@ Protocol (the one someone with new users would run):
   (a still pause with tracking noise and a short turn of the wrist) — or by nothing at all
   (back to back); recognised whole; a detection counts when its name is right and it
   overlaps a true gesture not yet counted (precision, recall, F1).
-* **Constants held out.** Each constant the recogniser keeps (:data:`grammar.shapes.WEIGHT`,
-  :data:`grammar.shapes.SPREAD`, :data:`grammar.shapes.TEMPO`, :data:`grammar.shapes.TURN` — which a
+* **Constants held out.** Each constant the recogniser keeps (:data:`grammar.refiner.WEIGHT`,
+  :data:`grammar.shapes.SPREAD`, :data:`grammar.refiner.TEMPO`, :data:`grammar.shapes.TURN` — which a
   library's own examples may overrule, :func:`grammar.shapes.choose_turn`) is swept over a
   grid; for each user the value best on the other four users is taken and that user's
   figure at it reported (leave one user out), beside the product's value on all five
@@ -232,7 +232,9 @@ def evaluate(data, users, classes, folders, streams, builtin: bool = False) -> d
 
 
 def main(quick: bool = False, full: bool = False) -> None:
-    from grammar import shapes
+    from grammar import refiner, shapes
+
+    home = {"WEIGHT": refiner, "SPREAD": shapes, "TEMPO": refiner, "TURN": shapes}  # where each constant is
 
     global GRID
     if full:
@@ -266,18 +268,18 @@ def main(quick: bool = False, full: bool = False) -> None:
         print(f"  learning one action from 3 examples (one controller, with its shapes; {len(each)} actions): "
               f"mean {np.mean(each) * 1000:.0f} ms, max {np.max(each) * 1000:.0f} ms (target max ≤ 100 ms); "
               f"a whole library per gesture, both settings: mean {np.mean(took) * 1000:.0f} ms")
-        product = {name: getattr(shapes, name) for name in GRID}
+        product = {name: getattr(home[name], name) for name in GRID}
         sweeps = {}
         for name, values in GRID.items():
             for v in (values if not quick else ()):
                 if v == product[name] and "figures" in sweeps:
                     sweeps[(name, v)] = sweeps["figures"]
                     continue
-                setattr(shapes, name, v)
+                setattr(home[name], name, v)
                 try:
                     sweeps[(name, v)] = evaluate(data, users, classes, folders, streams)
                 finally:
-                    setattr(shapes, name, product[name])
+                    setattr(home[name], name, product[name])
                 if v == product[name]:
                     sweeps["figures"] = sweeps[(name, v)]
             if quick:

@@ -2,7 +2,7 @@
 
 Stages, in order (SPEC grammar): the Segmenter's tokens (:mod:`doodle.input.segmenter`) →
 the Matcher's segments (:mod:`grammar.matcher`) → learned actions re-decided by their shapes
-(:class:`grammar.shapes.Refiner`) → interactions between tracks (the Contexter,
+(:class:`grammar.refiner.Refiner`) → interactions between tracks (the Contexter,
 :mod:`grammar.contexter`) → behaviour states (refused actions, §6.3.3).
 
 * :func:`recognize` is the batch form (``doodle recognize`` and ``doodle compile``): each
@@ -29,7 +29,7 @@ from grammar.constraints import RADIUS
 from grammar.contexter import InteractionSegment, LiveContexter, Refused, apply_behaviour, behaviours, with_interactions
 from grammar.library import Compiled, compile_library
 from grammar.matcher import Matcher, Segment, match
-from grammar.shapes import Refiner, refine
+from grammar.refiner import Refiner, refine
 from library.manifest import load_combined
 
 

@@ -1,5 +1,5 @@
 """Shapes of learned actions (grammar/shapes.py): DTW against many templates at once, the
-shape file format, the Refiner (streaming equals batch), track binding, and recognition of
+shape file format, the Refiner (grammar/refiner.py; streaming equals batch), track binding, and recognition of
 held-out real performances that tokens alone confuse."""
 
 import json
@@ -13,7 +13,7 @@ from hypothesis import strategies as st
 
 from doodle.app.cli.main import main
 from doodle.core.errors import DoodleError
-from grammar import shapes
+from grammar import refiner, shapes
 from grammar.learn import _dtw_cost
 
 VIVE = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "vive-gestures"
@@ -421,7 +421,7 @@ def test_a_small_gesture_after_a_long_one_is_not_taken_in_by_it(tmp_path, monkey
     right hand, which the hook barely moves): shapes are resampled by arc length, so the
     combo's window run on over the hook fits the combo as well as its own span does, and
     the hook was lost. The combo's examples last under 3.5 s, that window over 5: it is not
-    the combo (:data:`grammar.shapes.TEMPO`), and both are read."""
+    the combo (:data:`grammar.refiner.TEMPO`), and both are read."""
     from bench.learning_protocol import load as load_vive, make_library, stream
     from grammar.recognizer import load_actions, recognize
 
@@ -438,7 +438,7 @@ def test_a_small_gesture_after_a_long_one_is_not_taken_in_by_it(tmp_path, monkey
         return [s.action for s in recognize(doodle, compiled)["c0"][1] if s.action != "unknown"]
 
     assert named() == [g for g, _, _ in spans]
-    monkeypatch.setattr(shapes, "TEMPO", np.inf)  # durations not compared: the hook is taken in
+    monkeypatch.setattr(refiner, "TEMPO", np.inf)  # durations not compared: the hook is taken in
     assert named() == ["left_right_left_combo"]
 
 
@@ -462,7 +462,7 @@ def test_gestures_in_a_pending_run_with_what_a_window_gave_up_are_searched(tmp_p
         return [s.action for s in recognize(doodle, compiled)["c0"][1] if s.action != "unknown"]
 
     assert named() == gestures
-    monkeypatch.setattr(shapes.Refiner, "_spot_pending", lambda self, done, known: [])
+    monkeypatch.setattr(refiner.Refiner, "_spot_pending", lambda self, done, known: [])
     assert named() == ["fly_eagle"]
 
 
