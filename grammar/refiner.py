@@ -213,9 +213,13 @@ class Refiner:
         to. A motion between pauses that the Matcher read in pieces — several segments, or
         one with unknown tokens beside it — and that a learned action's shape fits whole,
         within its rejection distance and its examples' durations, is that action, the one
-        the user taught. A motion read whole as one built-in action stays that action: a
+        the user taught. A motion read whole as one built-in action stays that action — a
         learned gesture that hardly moves this hand has a loose rejection distance, and
-        would otherwise take built-in actions performed cleanly. A motion that no learned
+        would otherwise take built-in actions performed cleanly —, unless a learned action
+        whose shape fits the whole motion also reads its tokens with no more edits than the
+        built-in one does: then the tokens do not prefer the built-in action, and the shape
+        is the user's (an uppercut read as Stop at two edits, which the uppercut's own
+        expression reads at two as well). A motion that no learned
         action fits whole — no pause bounds it (back to back), or it holds more than one
         gesture — is searched around the segment instead (:meth:`_among_pieces`)."""
         if not self._moving(seg):
@@ -227,8 +231,9 @@ class Refiner:
             return None
         a, b = motion
         moving = [i for i in range(first, seg.stop) if self.tokens[i].name != "T_STILL"]
-        if (moving[0], moving[-1] + 1) == (a, b):  # the motion is this action's, whole
-            return None
+        if (moving[0], moving[-1] + 1) == (a, b):  # read whole as this action: it stays, unless …
+            whole = self._best([a], [(b, b)], known, motion=motion, across=False) if seg.distance is not None else None
+            return whole if whole is not None and whole[3] <= seg.distance else None  # … a learned one reads it as well
         whole = self._best(range(a, min(b, a + TRIM + 1)), [(max(a + 1, b - TRIM), b)], known, motion=motion,
                            across=False)
         return whole if whole is not None else self._among_pieces(seg, first, known)

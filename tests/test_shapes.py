@@ -326,6 +326,25 @@ def test_built_in_actions_performed_whole_stay_built_in_beside_learned_ones(tmp_
             assert [s.action for s in recognize(doodle, compiled)["c0"][1] if s.action != "Idle"] == [action]
 
 
+def test_a_motion_read_whole_as_a_built_in_action_is_the_learned_one_that_reads_it_as_well(tmp_path):
+    """Sub_U001's uppercut (ex_1), the uppercut learned from ex_0, ex_2 and ex_3: the Matcher
+    reads the whole motion as Stop, two edits from Stop's expression — and two from the
+    uppercut's, whose shape fits it. The tokens do not prefer the built-in action, the shape
+    is the user's: it is the uppercut (it was Stop)."""
+    from bench.learning_protocol import load as load_vive, make_library
+    from grammar.recognizer import load_actions, recognize
+
+    if not VIVE.is_dir():
+        pytest.skip("real Vive recordings not found")
+    user = load_vive(VIVE)["Sub_U001"]
+    gestures = ["uppercut_right", "uppercut_left", "hook_right", "hook_left"]
+    lib = make_library(tmp_path / "mine", {g: [user[g][i] for i in (0, 2, 3)] for g in gestures}, ("c0",))
+    compiled = load_actions(lib, True)
+    named = [s.action for s in recognize(user["uppercut_right"][1].select(["c0"]), compiled)["c0"][1]
+             if s.action not in ("unknown", "Idle")]
+    assert named == ["uppercut_right"]
+
+
 def test_learned_gestures_back_to_back_beside_built_in_ones(tmp_path):
     """Sub_U005's held-out takes back to back, with the built-in actions beside the learned
     ones: with no pause to bound a motion, the Matcher read a combo as Cast Fireball, Side
