@@ -35,6 +35,7 @@ from doodle.input.segmenter import SegmenterParams
 
 RAW = SegmenterParams(pause_s=0.0, significance=0.0, min_extent_s=0.0, level_cap=0.0)
 ACTIONS = [a for a in GESTURES if a != "Idle"]
+BACK_TO_BACK = 14  # built-in actions in a row in the back-to-back scenes beside a learned library
 OUT = Path("out/bench/performers.png")
 
 
@@ -154,16 +155,18 @@ def _beside_one(job) -> tuple[str, list, list, Counter]:
                 got = [s.action for s in recognize(doodle, compiled)["c0"][1] if s.action != "Idle"]
                 into.append(got == want)
                 if compiled is learned:
-                    taken.update((g, " ".join(want)) for g in got if g in names)
+                    taken.update((g, " ".join(want) if len(want) < 4 else f"{len(want)} back to back") for g in got
+                                 if g in names)
     return user, beside, without, taken
 
 
 def beside_learned() -> None:
     """Built-in actions performed with a user library beside them: each of the five Vive
     users' gestures learned on c0 from ex_0..2 (``bench.learning_protocol``), the main
-    example and every built-in action alone and inside a sequence, one take per style —
-    read as ``doodle recognize --library DIR`` reads them (learned and built-in actions
-    together), beside the built-in actions alone on the same scenes."""
+    example and every built-in action alone and inside a sequence, one take per style, and
+    :data:`BACK_TO_BACK` random built-in actions in a row with no Idle between (four takes
+    per style) — read as ``doodle recognize --library DIR`` reads them (learned and built-in
+    actions together), beside the built-in actions alone on the same scenes."""
     from bench.learning_protocol import ROOT
 
     if not sorted(ROOT.glob("*/*/*.csv")):
@@ -174,16 +177,21 @@ def beside_learned() -> None:
     scenes += [(("Idle", a, "Idle"), style, 400 + k) for k, style in enumerate(style_grid()) for a in ACTIONS]
     scenes += [(("Idle", "Walk", a, "Side Walk Left", "Idle"), style, 500 + k)
                for k, style in enumerate(style_grid()) for a in ACTIONS]
+    first = len(scenes)
+    rng = np.random.default_rng(7)  # and BACK_TO_BACK actions in a row, no Idle between, a few takes per style
+    scenes += [(("Idle", *rng.choice(ACTIONS, BACK_TO_BACK), "Idle"), style, 700 + 10 * k + j)
+               for k, style in enumerate(style_grid()) for j in range(4)]
     with ProcessPoolExecutor(max_workers=2) as pool:
         rows = list(pool.map(_beside_one, [(u, scenes, k == 0) for k, u in enumerate(users)]))
-    alone = rate(rows[0][2])
-    print(f"  beside a learned library (each Vive user's gestures learned on c0; "
-          f"{len(scenes)} scenes: the main example and every action alone and in a sequence, one take per style): "
-          f"exact per user; the built-in actions alone: {alone:.3f}")
+    alone, alone_b2b = rate(rows[0][2][:first]), rate(rows[0][2][first:])
+    print(f"  beside a learned library (each Vive user's gestures learned on c0; {first} scenes: the main example "
+          f"and every action alone and in a sequence, one take per style; and {len(scenes) - first} of "
+          f"{BACK_TO_BACK} actions back to back): exact per user; the built-in actions alone: {alone:.3f}, "
+          f"back to back {alone_b2b:.3f}")
     for user, beside, without, taken in rows:
         common = ", ".join(f"{g} in {what} ×{n}" for (g, what), n in taken.most_common(3))
-        print(f"    {user.replace('Sub_', ''):<6} {rate(beside):.3f}; "
-              f"scenes given a learned name: {sum(taken.values())}" + (f" ({common})" if common else ""))
+        print(f"    {user.replace('Sub_', ''):<6} {rate(beside[:first]):.3f}, back to back {rate(beside[first:]):.3f}; "
+              f"learned names given: {sum(taken.values())}" + (f" ({common})" if common else ""))
 
 
 def main(quick: bool = False) -> dict:
