@@ -219,9 +219,9 @@ class Refiner:
         whose shape fits the whole motion also reads its tokens with no more edits than the
         built-in one does: then the tokens do not prefer the built-in action, and the shape
         is the user's (an uppercut read as Stop at two edits, which the uppercut's own
-        expression reads at two as well). A motion that no learned
-        action fits whole — no pause bounds it (back to back), or it holds more than one
-        gesture — is searched around the segment instead (:meth:`_among_pieces`)."""
+        expression reads at two as well). A motion that no learned action fits whole — no
+        pause bounds it (back to back), or it holds more than one gesture — is searched
+        around the segment instead (:meth:`_among_pieces`)."""
         if not self._moving(seg):
             return None
         motion = self._motion(seg, known, closed)
@@ -275,9 +275,8 @@ class Refiner:
         learned gesture's tokens as pieces as readily (built-in segments with unknown tokens
         between, each run too short to search; a hook as Cast Fireball with a few unknown
         tokens after it; an uppercut's start as Walk Back, its rest as the uppercut); a
-        window that holds more than the one segment is read as the learned action it fits.
-        The segment alone stays the built-in action, as a motion read whole does
-        (:meth:`_over_builtin`)."""
+        window that holds more than the one segment is read as the learned action it fits;
+        the segment alone stays the built-in action."""
         starts, ends = self._pieces(seg, self._waiting, known, True)
         return self._best(starts, ends, known, across=False, without=(first, seg.stop))
 
