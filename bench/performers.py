@@ -155,8 +155,8 @@ def _beside_one(job) -> tuple[str, list, list, Counter]:
                 got = [s.action for s in recognize(doodle, compiled)["c0"][1] if s.action != "Idle"]
                 into.append(got == want)
                 if compiled is learned:
-                    taken.update((g, " ".join(want) if len(want) < 4 else f"{len(want)} back to back") for g in got
-                                 if g in names)
+                    what = f"{len(want)} back to back" if len(want) == BACK_TO_BACK else " ".join(want)
+                    taken.update((g, what) for g in got if g in names)
     return user, beside, without, taken
 
 

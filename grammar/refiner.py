@@ -155,15 +155,13 @@ class Refiner:
                 return self._emit(UNKNOWN, first, seg.stop, False, None)
             found = self._spots(first, seg.stop, known)
         elif seg.action in self.shapes.names:
-            pending = self._unknown is not None and self._unknown.stop == first
-            lowest = self._unknown.first if pending else first  # it may take back tokens of an unknown run
-            back = UNKNOWN_REACH if pending else REACH
             ends = [(seg.stop - TRIM, seg.stop + REACH)]
             if after is not None and after.action in self.shapes.names:  # one gesture the Matcher cut in two
                 ends.append((after.stop - TRIM, after.stop + REACH))
             elif after is not None and after.action == UNKNOWN:
                 ends.append((seg.stop, min(after.stop, seg.stop + UNKNOWN_REACH)))
-            starts = list(range(max(lowest, seg.first - back), min(seg.stop, seg.first + TRIM + 1)))
+            lowest = max(self._open_start(first), seg.first - UNKNOWN_REACH)  # into a pending unknown run, if any
+            starts = list(range(lowest, min(seg.stop, seg.first + TRIM + 1)))
             motion = self._motion(seg, known, closed)
             motion = None if motion == "pending" else motion
             if motion is not None:  # the whole motion between pauses is a window too, and no window leaves it
@@ -252,8 +250,7 @@ class Refiner:
         from grammar.matcher import UNKNOWN
 
         first = max(seg.first, self._done)
-        pending = self._unknown is not None and self._unknown.stop == first
-        a = max(self._unknown.first, seg.first - UNKNOWN_REACH) if pending else first
+        a = max(self._open_start(first), seg.first - UNKNOWN_REACH)
         b = min(known, a + SPOT_MAX)
         b = next((i for i in range(seg.stop, b) if self.tokens[i].name == "T_STILL"), b)
         ends = [(seg.stop, seg.stop)]
@@ -342,6 +339,12 @@ class Refiner:
         self._done = done
         return out
 
+    def _open_start(self, first: int) -> int:
+        """Where the pending unknown run that ends at token ``first`` starts (a window may
+        take its tokens back), or ``first`` when none ends there."""
+        pending = self._unknown
+        return pending.first if pending is not None and pending.stop == first else first
+
     def _motion(self, seg, known: int, closed: bool):
         """The tokens ``(a, b)`` of the motion a shaped segment lies in: from the last pause
         before it (not reaching back into what is decided, but into a pending unknown run)
@@ -350,8 +353,7 @@ class Refiner:
         back), "pending" while it is not known yet."""
         names = self.tokens
         first = max(seg.first, self._done)
-        pending = self._unknown is not None and self._unknown.stop == first
-        a = self._unknown.first if pending else first
+        a = self._open_start(first)
         for i in range(min(seg.first, known) - 1, a - 1, -1):
             if names[i].name == "T_STILL":
                 a = i + 1
