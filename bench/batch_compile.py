@@ -13,11 +13,13 @@ see the same load, each beside the target ≥ 1.8× on 2 cores:
 * **end to end** — wall time of a fresh process, what a user waits for: ``doodle compile
   FOLDER -o OUT --workers 2`` (Dask's import, the cluster's start and stop, and every
   worker's own first compile — imports, the library loaded — included) against the child
-  compiling the files in turn (its start-up and first compile included once);
+  compiling the files in turn (its start-up and first compile included once); beside them
+  the floor no engine can beat, a fresh process compiling the files on 2 processes it forks
+  without Dask (:func:`pooled`);
 * **steady state** — the same 16 compiles once everything is loaded: in turn, after one
   warm-up compile in that process, against a batch sent to a running 2-worker cluster
-  whose workers have each compiled once (``--scheduler`` path), its housekeeping
-  :data:`doodle.app.batch.QUIET` as a local one's.
+  whose workers have each compiled once (``--scheduler`` path), set up as a local one
+  (:func:`doodle.app.batch.local_config`: its housekeeping slowed, glibc's malloc untouched).
 
 OpenBLAS is pinned to one thread everywhere (``OPENBLAS_NUM_THREADS=1``, set for the child
 processes and Dask's workers), so that two workers do not fight over two cores. The
@@ -74,21 +76,36 @@ def make_inputs(folder: Path, n: int, blocks: int = 0) -> tuple[list[Path], str]
 def one_by_one(folder: Path, out: Path, warm: bool) -> float:
     """Every doodle of ``folder`` compiled alone, in turn, in this process (output discarded);
     after one untimed compile if ``warm``. Seconds of the compiles in turn."""
-    from doodle.app.cli.main import main
-
-    def compile_into(f: Path, folder: Path) -> None:
-        with contextlib.redirect_stdout(io.StringIO()):
-            if main(["compile", str(f), "-o", str(folder / f.stem)]) != 0:
-                raise SystemExit(f"{f}: compile failed")
-
     files = sorted(folder.glob("*.doodle"))
     if warm:
         with tempfile.TemporaryDirectory() as scratch:
-            compile_into(files[0], Path(scratch))
+            _compile_quietly(files[0], Path(scratch))
     start = time.perf_counter()
     for f in files:
-        compile_into(f, out)
+        _compile_quietly(f, out)
     return time.perf_counter() - start
+
+
+def _compile_quietly(f: Path, out: Path) -> None:
+    from doodle.app.cli.main import main
+
+    with contextlib.redirect_stdout(io.StringIO()):
+        if main(["compile", str(f), "-o", str(out / f.stem)]) != 0:
+            raise SystemExit(f"{f}: compile failed")
+
+
+def pooled(folder: Path, out: Path) -> None:
+    """The floor under the batch: every doodle of ``folder`` compiled on 2 worker processes
+    forked from this one after the compile's imports — a plain ``multiprocessing`` pool, no
+    Dask —, one file per task as the batch sends them."""
+    import multiprocessing
+
+    from doodle.app.cli.compile import import_compile_modules
+
+    import_compile_modules()
+    files = sorted(folder.glob("*.doodle"))
+    with multiprocessing.get_context("fork").Pool(WORKERS) as pool:
+        pool.starmap(_compile_quietly, [(f, out) for f in files], chunksize=1)
 
 
 def _env() -> dict:
@@ -132,15 +149,16 @@ def _load() -> str:
     return f"load average {', '.join(f'{x:.2f}' for x in os.getloadavg())}; free cores ≈ {2 * alone / both:.2f}"
 
 
-def end_to_end(takes: Path, out: Path, runs: int) -> tuple[list, list, bool]:
-    serial, batch, same = [], [], True
+def end_to_end(takes: Path, out: Path, runs: int) -> tuple[list, list, list, bool]:
+    serial, batch, pool, same = [], [], [], True
     for _ in range(runs):
         serial.append(_child(["-m", "bench.batch_compile", "--one-by-one", str(takes), str(out)])[0])
         alone = _outputs(out)
         batch.append(_child(["-m", "doodle.app.cli.main", "compile", str(takes), "-o", str(out),
                              "--workers", str(WORKERS)])[0])
         same = same and _outputs(out) == alone  # into the same folders: report.json's paths alike
-    return serial, batch, same
+        pool.append(_child(["-m", "bench.batch_compile", "--pool", str(takes), str(out)])[0])
+    return serial, batch, pool, same
 
 
 def steady_state(takes: Path, out: Path, runs: int) -> tuple[list, list]:
@@ -156,7 +174,7 @@ def steady_state(takes: Path, out: Path, runs: int) -> tuple[list, list]:
     args = build_parser().parse_args(["compile", str(takes), "-o", str(out)])
     jobs, options = batch.plan(batch.expand_inputs(args.files), out), batch.options_for_workers(args)
     serial, parallel = [], []
-    with dask.config.set(batch.QUIET), \
+    with dask.config.set(batch.local_config()), \
             LocalCluster(n_workers=WORKERS, threads_per_worker=1, processes=True, dashboard_address=None,
                          silence_logs=logging.CRITICAL, env={"OPENBLAS_NUM_THREADS": "1"}) as cluster:
         warm = [batch.Job(jobs[0].file, out / ".warm" / str(i)) for i in range(WORKERS)]
@@ -172,13 +190,16 @@ def steady_state(takes: Path, out: Path, runs: int) -> tuple[list, list]:
     return serial, parallel
 
 
-def _line(label: str, serial: list, batch: list, files: int) -> None:
+def _line(label: str, serial: list, batch: list, files: int, pool: list | None = None) -> None:
     s, b = statistics.median(serial), statistics.median(batch)
     runs = lambda xs: ", ".join(f"{x:.1f}" for x in xs)  # noqa: E731
     print(f"  {label}")
     print(f"    one after another, one process  {s:6.1f} s  ({runs(serial)})  {files / s:5.2f} files/s")
     print(f"    {WORKERS}-worker local cluster          {b:6.1f} s  ({runs(batch)})  {files / b:5.2f} files/s")
     print(f"    speed-up {s / b:.2f}×  (target ≥ {TARGET}×: {'met' if s / b >= TARGET else 'not met'})")
+    if pool:
+        p = statistics.median(pool)
+        print(f"    floor, {WORKERS} forked processes without Dask {p:4.1f} s  ({runs(pool)}): speed-up {s / p:.2f}×")
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -189,9 +210,13 @@ def main(argv: list[str] | None = None) -> int:
                     help="compile copies of a doodle of this many 8.6 s blocks instead of the demo (7: about 60 s)")
     ap.add_argument("--one-by-one", nargs=2, metavar=("FOLDER", "OUT"), help=argparse.SUPPRESS)
     ap.add_argument("--warm", action="store_true", help=argparse.SUPPRESS)
+    ap.add_argument("--pool", nargs=2, metavar=("FOLDER", "OUT"), help=argparse.SUPPRESS)
     args = ap.parse_args(argv)
     if args.one_by_one:
         print(f"{one_by_one(Path(args.one_by_one[0]), Path(args.one_by_one[1]), args.warm):.6f}")
+        return 0
+    if args.pool:
+        pooled(Path(args.pool[0]), Path(args.pool[1]))
         return 0
 
     with tempfile.TemporaryDirectory() as tmp:
@@ -200,11 +225,11 @@ def main(argv: list[str] | None = None) -> int:
         print(f"Batch compile: {args.files} {what}, one after another in one process vs a {WORKERS}-worker local "
               f"Dask cluster (median of {args.runs}; {os.cpu_count()} CPUs, OPENBLAS_NUM_THREADS=1)")
         print(f"  before: {_load()}")
-        serial, batch, same = end_to_end(takes, out, args.runs)
+        serial, batch, pool, same = end_to_end(takes, out, args.runs)
         warm_serial, warm_batch = steady_state(takes, out, args.runs)
     print(f"  after:  {_load()}")
     _line("end to end (fresh processes: start-up, imports, cluster start and stop included)", serial, batch,
-          args.files)
+          args.files, pool)
     _line("steady state (everything loaded; a running cluster)", warm_serial, warm_batch, args.files)
     print(f"  batch outputs byte-identical to one-by-one: {'yes' if same else 'NO'}")
     return 0

@@ -38,6 +38,12 @@ QUIET = {
     "distributed.worker.memory.monitor-interval": "5s",
     "distributed.admin.tick.interval": "1s",
 }
+# glibc's malloc left as it is. Dask's nanny sets MALLOC_TRIM_THRESHOLD_=65536 for its workers
+# (in this process's environment, so every worker spawned after it, and any program this
+# process starts later, inherit it): a fixed trim threshold turns glibc's adaptive mmap
+# threshold off, so every large numpy array of a compile is mapped and unmapped afresh — a
+# 60 s doodle compiled in 0.30 s instead of 0.25 s.
+UNTRIMMED = {"distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": None}
 
 
 @dataclass(frozen=True)
@@ -191,12 +197,17 @@ def start_method() -> str:
     return "fork" if sys.platform.startswith("linux") else multiprocessing.get_start_method()
 
 
+def local_config() -> dict:
+    """Dask's settings for a local cluster: :data:`QUIET`, :data:`UNTRIMMED`, workers started
+    as :func:`start_method` says."""
+    return {**QUIET, **UNTRIMMED, "distributed.worker.multiprocessing-method": start_method()}
+
+
 @contextlib.contextmanager
 def client_for(workers: int, scheduler: str | None):
     """A Dask client: of the running ``scheduler``, or of a local cluster of ``workers``
     processes of one thread each (numpy and Python code: processes, not threads; started as
-    :func:`start_method` says), with no dashboard, no log lines and its housekeeping
-    :data:`QUIET`."""
+    :func:`start_method` says), with no dashboard, no log lines and :func:`local_config`."""
     import logging
 
     from dask.distributed import Client, LocalCluster
@@ -212,7 +223,7 @@ def client_for(workers: int, scheduler: str | None):
             return
         import dask
 
-        with dask.config.set({**QUIET, "distributed.worker.multiprocessing-method": start_method()}), \
+        with dask.config.set(local_config()), \
                 LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None,
                              silence_logs=logging.CRITICAL) as cluster, Client(cluster) as client:
             yield client
