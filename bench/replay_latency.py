@@ -14,6 +14,12 @@ what each frame costs.
   gesture streamed one after another with an idle stretch between them (the live case) —
   read with that library alone and with the built-in actions beside it.
   Where a gesture ends: :func:`doodle.app.replay.latencies`.
+* Recording at pace: ``doodle record``'s loop (:func:`doodle.app.recorder.record`) fed by a
+  source that, like SteamVR, gives only the pose of the moment — a real user's held-out
+  gestures back to back, read with their learned library and the built-in actions (where
+  deciding an action takes longest) — for :data:`PACE_SECONDS` on the real clock: how often
+  a poll came more than a period late, the longest wait between polls and the samples the
+  file lacks; beside the floor, the same recording with recognition off.
 * Cost per 90 Hz frame on the demo (Segmenter, Matcher, provisional labels), CPU time of
   the thread: p50 and p99 (target p99 ≤ 1 ms), beside the same without provisional labels
   and the Segmenter alone in the same run; and the wall-clock time replay measures.
@@ -100,6 +106,47 @@ def _real() -> None:
     report(f"real recordings, {len(users)} users' held-out gestures streamed, each user's learned library (c0)",
            lines[False])
     report("the same, with the built-in actions beside the learned ones (`--library DIR`, the default)", lines[True])
+    _recording_pace(data)
+
+
+PACE_SECONDS = 15.0
+
+
+def _recording_pace(data) -> None:
+    from bench.learning_protocol import make_library, stream
+    from doodle.app.recorder import record
+    from doodle.input.sources import SyntheticSource
+
+    class OfTheMoment(SyntheticSource):
+        """The stream's sample at the current time on the real clock, as SteamVR gives poses."""
+
+        def __init__(self, doodle):
+            super().__init__(doodle)
+            self.start, self.polls = None, []
+
+        def read(self):
+            now = time.monotonic()
+            self.start = now if self.start is None else self.start
+            self.polls.append(now)
+            self._i = int((now - self.start) * self.rate)
+            return super().read() if self._i < PACE_SECONDS * self.rate else None
+
+    user = sorted(data)[min(2, len(data) - 1)]
+    classes = sorted(data[user])
+    print(f"  recording at pace, {PACE_SECONDS:g} s on the real clock ({user}'s held-out gestures back to back, "
+          f"learned library and built-in actions; a pose source of the moment, as SteamVR):")
+    with tempfile.TemporaryDirectory() as tmp:
+        folder = make_library(Path(tmp) / user, {g: data[user][g][:3] for g in classes}, ("c0",))
+        doodle, _ = stream([(g, d.select(["c0"])) for g in classes for d in data[user][g][3:5]],
+                           np.random.default_rng(0), idle=False)
+        compiled = load_actions(folder, True)
+        for label, recognise in (("recognising", True), ("floor, recognition off", False)):
+            source = OfTheMoment(doodle)
+            result = record(source, Path(tmp) / f"{recognise}.doodle", compiled=compiled, recognise=recognise)
+            waits = np.diff(source.polls[1:])  # from the first frame's poll on
+            expected = int(PACE_SECONDS * doodle.rate)
+            print(f"    {label:<24} polls more than a period late {int((waits > 2 / doodle.rate).sum()):3d}, longest wait "
+                  f"{waits.max() * 1e3:5.1f} ms; samples {result.samples} of {expected}")
 
 
 def _segmenter_only(doodle) -> np.ndarray:

@@ -146,6 +146,37 @@ def test_sleeps_until_each_tick(tmp_path, automaton):
     np.testing.assert_allclose(np.diff(after), period, rtol=1e-9)
 
 
+def test_slow_recognition_leaves_no_hole_in_a_live_recording(tmp_path, automaton, monkeypatch):
+    """A live source gives only the pose of the moment (SteamVR): the recorder must poll it on
+    every tick, however long recognising a frame takes (deciding a learned action can take a
+    few tenths of a second). Recognition stalls here for 0.3 s on one frame, on the real clock."""
+    from grammar import recognizer
+
+    doodle = two_tracks()
+    slow, pushes = 0.3, []
+    push = recognizer.Live.push
+
+    def stalling(self, t, poses):
+        pushes.append(t)
+        if len(pushes) == 30:
+            time.sleep(slow)
+        return push(self, t, poses)
+
+    monkeypatch.setattr(recognizer.Live, "push", stalling)
+
+    class OfTheMoment(SyntheticSource):  # the doodle's sample at the current time, as SteamVR gives
+        def read(self):
+            now = time.monotonic()
+            self.start = getattr(self, "start", now)
+            self._i = int((now - self.start) * self.rate)
+            return super().read() if self._i < 60 else None
+
+    result = record(OfTheMoment(doodle), tmp_path / "live.doodle", compiled=automaton)
+    t = load(tmp_path / "live.doodle").t
+    assert len(pushes) == result.samples == len(t)  # every frame recorded was recognised
+    assert np.diff(t).max() < slow / 2  # polled on every tick meanwhile: no hole of the stall's length
+
+
 # --------------------------------------------------------------------------- live recognition
 
 

@@ -4,14 +4,16 @@ and recognise actions live.
 :func:`record` is the same loop for SteamVR, a replayed file or a synthetic performance
 (:mod:`doodle.input.sources`). Each frame is written at once with :class:`~doodle.input.fileformat.DoodleWriter`
 (fsync about once a second: a crash or ``kill -9`` loses at most about a second) and every
-track goes through the streaming Recognizer (:class:`grammar.recognizer.Live`), reported through
-``on_event(kind, payload)``; ``payload`` is a dict:
+track goes through the streaming Recognizer (:class:`grammar.recognizer.Live`) on a thread of its
+own, fed the frames in order, so that the source is polled on every tick however long a frame's
+recognition takes. What it finds is reported through ``on_event(kind, payload)`` — called from
+that thread, except ``"started"`` and ``"stopped"``, and in order —; ``payload`` is a dict:
 
 * ``"started"`` — ``t`` (0.0), ``path``, ``tracks`` (names): the first frame is being written;
 * ``"token"`` — ``track``, ``token``, ``start``, ``end`` (s), ``final``: a token completed
   (``final=True``) or a new token in progress (``final=False``, for live feedback);
 * ``"action"`` — ``track``, ``action``, ``start``, ``end`` (s), ``exact``, ``distance``, ``at``
-  (the recording time when it was recognised); an interaction's roles come once more, with
+  (the time of the frame whose recognition found it: recognition may run behind the recording); an interaction's roles come once more, with
   ``interaction`` and ``role``, once the interaction is decided;
 * ``"provisional"`` — the same fields, before that: an action as soon as the tokens so far
   say it (:class:`grammar.recognizer.Live`; ``start`` and ``end`` as they stand — a pause's
@@ -58,13 +60,14 @@ class _Live:
     """Every track's live recognition (the one Recognizer, :class:`grammar.recognizer.Live`)
     and what a performer is shown: tokens, actions, refusals, tracking lost and found."""
 
-    def __init__(self, compiled, names, rate, params, mounts, times, emit):
+    def __init__(self, compiled, names, rate, params, mounts, emit):
         from grammar.recognizer import Live
 
         self.live = Live(compiled, names, rate, params, source="<recording>", restart=True)
         self.names, self.params = list(names), params
         self.mounts = [None if np.allclose(m, IDENTITY) else np.asarray(m, dtype=float) for m in mounts]
-        self.times, self.emit = times, emit
+        self.times: list[float] = []  # of the frames pushed so far
+        self.emit = emit
         self.actions: dict[str, list[tuple[str, float, float]]] = {n: [] for n in names}
         self.tracked = {n: True for n in names}
         self.lost_at = {n: 0.0 for n in names}
@@ -75,8 +78,8 @@ class _Live:
         a = min(start, last)
         return self.times[a], self.times[min(max(end - 1, a), last)]
 
-    def push(self, i: int, poses) -> None:
-        t = self.times[i]
+    def push(self, t: float, poses) -> None:
+        self.times.append(t)
         mounted = []
         for name, mount, (p, q, ok) in zip(self.names, self.mounts, poses):
             ok = bool(ok)
@@ -140,6 +143,50 @@ class _Live:
             self.emit("action", payload)
 
 
+class _Behind:
+    """:class:`_Live` on a thread of its own, fed the recorded frames in order through a
+    queue, so that the recording loop polls the source at its rate whatever recognition
+    costs. A live source (SteamVR) gives only the pose of the moment: a frame not polled on
+    its tick is a hole in the file, and deciding an action can take a few tenths of a second
+    (a learned action's shape compared with the motion's, at a gesture's end). Recognition
+    may fall behind for as long; the events it emits come from its thread, in frame order.
+    An exception in it stops the recording at the next frame (:meth:`push` raises it)."""
+
+    def __init__(self, live: _Live):
+        import queue
+        import threading
+
+        self.live, self.frames, self.error = live, queue.SimpleQueue(), None
+        self.thread = threading.Thread(target=self._run, name="doodle-live-recognition", daemon=True)
+        self.thread.start()
+
+    def _run(self) -> None:
+        while (frame := self.frames.get()) is not None:
+            if self.error is None:
+                try:
+                    self.live.push(*frame)
+                except BaseException as e:  # re-raised in the recording loop
+                    self.error = e
+
+    def push(self, t: float, poses) -> None:
+        if self.error is not None:
+            raise self.error
+        self.frames.put((t, poses))
+
+    def finish(self) -> None:
+        """Wait until every frame pushed is recognised and the thread has ended."""
+        if self.thread.is_alive():
+            self.frames.put(None)
+            self.thread.join()
+
+    def close(self) -> dict:
+        """:meth:`_Live.close` once every frame is recognised (raises what recognition raised)."""
+        self.finish()
+        if self.error is not None:
+            raise self.error
+        return self.live.close()
+
+
 def record(source, path, *, clock=time.monotonic, sleep=time.sleep, wait_for_trigger: bool = False,
            max_seconds: float | None = None, on_event=None, library_dir=None, use_builtin: bool = True,
            params: SegmenterParams = SegmenterParams(), compiled=None, overwrite: bool = False,
@@ -174,7 +221,11 @@ def record(source, path, *, clock=time.monotonic, sleep=time.sleep, wait_for_tri
     rate = float(source.rate)
     period = 1.0 / rate
     mount = profile(source.device).mount
-    writer, live, times, t0, reason = None, None, [], None, "end"
+    names = [name for name, _, _ in source.tracks]
+    writer, times, t0, reason = None, [], None, "end"
+    # ready before the first frame (compiling its automata takes a tenth of a second or so)
+    live = _Behind(_Live(compiled if recognise else None, names, rate, params,
+                         [(mounts or {}).get(n, mount) for n in names], emit))
     try:
         try:
             tick = clock()
@@ -193,10 +244,7 @@ def record(source, path, *, clock=time.monotonic, sleep=time.sleep, wait_for_tri
                         continue
                     t0 = frame.t
                     writer = DoodleWriter(path, source.tracks, rate, source.device, overwrite=overwrite)
-                    names = [name for name, _, _ in source.tracks]
-                    live = _Live(compiled if recognise else None, names, rate, params,
-                                 [(mounts or {}).get(n, mount) for n in names], times, emit)
-                    emit("started", {"t": 0.0, "path": str(path), "tracks": [name for name, _, _ in source.tracks]})
+                    emit("started", {"t": 0.0, "path": str(path), "tracks": names})
                 elif wait_for_trigger and frame.trigger:
                     reason = "trigger"
                     break
@@ -208,11 +256,12 @@ def record(source, path, *, clock=time.monotonic, sleep=time.sleep, wait_for_tri
                     continue  # nothing new since the last poll
                 writer.append(t, frame.poses)
                 times.append(t)
-                live.push(len(times) - 1, frame.poses)
+                live.push(t, frame.poses)
         except KeyboardInterrupt:
             reason = "interrupted"
         result = live.close() if len(times) >= 2 else {}
     finally:
+        live.finish()  # nothing left running, whatever ended the recording
         if writer is not None:
             writer.close()
     emit("stopped", {"t": times[-1] if times else 0.0, "reason": reason, "samples": len(times)})
@@ -222,4 +271,4 @@ def record(source, path, *, clock=time.monotonic, sleep=time.sleep, wait_for_tri
         if t0 is None and wait_for_trigger:
             raise DoodleError(f"{path}: the trigger was never pressed; nothing recorded")
         raise DoodleError(f"{path}: recording stopped after {len(times)} sample(s); nothing recorded")
-    return RecordResult(path, len(times), times[-1], live.actions, reason, result)
+    return RecordResult(path, len(times), times[-1], live.live.actions, reason, result)
