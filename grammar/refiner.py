@@ -57,7 +57,8 @@ class Refiner:
     were at the action's rejection distance (:meth:`_best`). The best window wins — unless
     two learned actions fit the motion's two parts better than one fits it (:meth:`_two`):
     then both are read, back to back (with no pause within :data:`SPOT_MAX` tokens, the
-    segment's own tokens are tried so). With none, the segment's own tokens are searched as an
+    segment's own tokens are tried so, and the best window too where it reaches over the
+    next segment). With none, the segment's own tokens are searched as an
     unknown run's are (two gestures or one); failing that, it is unknown. A window may also take back up to
     :data:`UNKNOWN_REACH` tokens of the unknown run before it, or reach as far into the
     unknown run after it. Tokens a window takes from the next segment are taken from it;
@@ -67,7 +68,8 @@ class Refiner:
     rejection distance is reported, the best first, then the rest of the run on either side
     searched again (:meth:`_spots`). Other segments pass through
     (less any tokens taken) — but a built-in action's segment in a motion the Matcher read
-    in pieces is the learned action that fits the whole motion, if one does, or else the
+    in pieces is the learned action that fits the whole motion, if one does (or two that
+    fit its two parts better, back to back), or else the
     one that fits the segment with the pieces beside it, cutting no other built-in segment
     (:meth:`_over_builtin`, :meth:`_among_pieces`); it waits for the pause ending its motion
     and for the Matcher's segments as far as such a window may reach. A shaped
@@ -172,6 +174,10 @@ class Refiner:
             if two is not None:
                 return self._both(two, first, seg.stop, known)
             best = self._best(starts, ends, known, motion=motion)
+            if best is not None and best[1] > seg.stop + REACH:  # over the next segment too: or two gestures?
+                two = self._two(best[:2], known)
+                if two is not None:
+                    return self._both(two, first, seg.stop, known)
             found = [best] if best is not None else []
             if best is None and SPOT_TOKENS <= seg.stop - first <= SPOT_MAX:  # none fits around it: searched within
                 two = self._two((first, seg.stop), known, whole=False)
@@ -179,10 +185,9 @@ class Refiner:
                     return self._both(two, first, seg.stop, known)
                 found = self._spots(first, seg.stop, known)
         else:
-            best = self._over_builtin(seg, first, known, closed)
-            if best is None:
+            found = self._over_builtin(seg, first, known, closed)
+            if not found:
                 return self._emit(seg.action, first, seg.stop, seg.exact, seg.distance)
-            found = [best]
         if not found:
             return self._spot_pending(first, known) + self._emit(UNKNOWN, first, seg.stop, False, None)
         f = found[0][0]
@@ -201,11 +206,13 @@ class Refiner:
             self.tokens[i].name != "T_STILL" for i in range(max(seg.first, self._done), seg.stop))
 
     def _over_builtin(self, seg, first: int, known: int, closed: bool):
-        """A learned action read over the motion a segment of an action without shapes lies
-        in (``(first, stop, action, edits)``), or None: the window of :meth:`_best` from
-        within :data:`TRIM` tokens of the motion's start to within as many of its end, when
-        it fits. The Matcher reads a learned gesture's tokens — a new performance's, 5 to 10
-        edits from its examples' — as the few-token expressions of built-in actions as
+        """The learned actions read over the motion a segment of an action without shapes lies
+        in (``[(first, stop, action, edits)]``; none: it stays): the window of :meth:`_best`
+        from within :data:`TRIM` tokens of the motion's start to within as many of its end,
+        when it fits — or two learned gestures back to back, when they explain the motion
+        better than that one (:meth:`_two`). The Matcher reads a learned gesture's tokens —
+        a new performance's, 5 to 10 edits from its examples' — as the few-token expressions
+        of built-in actions as
         readily as its own (a cartwheel as Dodge then Block, a hook as Walk Back then Side
         Walk Right): the tokens cannot tell them apart, and built-in actions have no shapes
         to. A motion between pauses that the Matcher read in pieces — several segments, or
@@ -221,20 +228,25 @@ class Refiner:
         pause bounds it (back to back), or it holds more than one gesture — is searched
         around the segment instead (:meth:`_among_pieces`)."""
         if not self._moving(seg):
-            return None
+            return []
         motion = self._motion(seg, known, closed)
         if motion is None:
             return self._among_pieces(seg, first, known)
         if motion == "pending" or motion[1] - motion[0] < SPOT_TOKENS:
-            return None
+            return []
         a, b = motion
         moving = [i for i in range(first, seg.stop) if self.tokens[i].name != "T_STILL"]
         if (moving[0], moving[-1] + 1) == (a, b):  # read whole as this action: it stays, unless …
             whole = self._best([a], [(b, b)], known, motion=motion, across=False) if seg.distance is not None else None
-            return whole if whole is not None and whole[3] <= seg.distance else None  # … a learned one reads it as well
-        whole = self._best(range(a, min(b, a + TRIM + 1)), [(max(a + 1, b - TRIM), b)], known, motion=motion,
-                           across=False)
-        return whole if whole is not None else self._among_pieces(seg, first, known)
+            if whole is None or whole[3] > seg.distance:  # … a learned one reads it as well
+                return []
+        else:
+            whole = self._best(range(a, min(b, a + TRIM + 1)), [(max(a + 1, b - TRIM), b)], known, motion=motion,
+                               across=False)
+            if whole is None:
+                return self._among_pieces(seg, first, known)
+        two = self._two(motion, known)  # or two learned gestures back to back, as a shaped segment's motion may be
+        return list(two) if two is not None else [whole]
 
     def _pieces(self, seg, after: list, known: int, closed: bool):
         """The windows :meth:`_among_pieces` reads around a built-in segment, ``(starts,
@@ -264,8 +276,9 @@ class Refiner:
             ends.append((w.first, min(w.stop, b)) if w.action == UNKNOWN else (w.stop, w.stop))
         return (range(a, first + 1), ends) if closed or b <= seg.stop else None
 
-    def _among_pieces(self, seg, first: int, known: int):
-        """A learned action read over a built-in segment and the pieces beside it, or None:
+    def _among_pieces(self, seg, first: int, known: int) -> list:
+        """A learned action read over a built-in segment and the pieces beside it (a list of
+        one ``(first, stop, action, edits)``, or none):
         the best window (:meth:`_best`) of :meth:`_pieces` — one that holds the segment
         whole and cuts no other built-in one — other than the segment alone. Where gestures
         follow each other without a pause no motion bounds one, and the Matcher reads a
@@ -275,7 +288,8 @@ class Refiner:
         window that holds more than the one segment is read as the learned action it fits;
         the segment alone stays the built-in action."""
         starts, ends = self._pieces(seg, self._waiting, known, True)
-        return self._best(starts, ends, known, across=False, without=(first, seg.stop))
+        best = self._best(starts, ends, known, across=False, without=(first, seg.stop))
+        return [best] if best is not None else []
 
     def _emit_found(self, found: list, stop: int) -> list:
         """Learned actions found in order ``[(first, stop, action, edits), …]`` emitted, the

@@ -367,6 +367,33 @@ def test_learned_gestures_back_to_back_beside_built_in_ones(tmp_path):
         assert named == [g for g, _, _ in spans]
 
 
+def test_two_learned_gestures_in_one_motion_of_built_in_pieces(tmp_path):
+    """Gestures back to back, the built-in actions beside the learned ones, where one
+    learned action's window held two gestures: Sub_U002's two uppercuts after a backflip,
+    a motion the Matcher read in built-in pieces and a backflip's shape fitted whole;
+    Sub_U005's hook_left and golf_swing, which the golf swing's window over the Matcher's
+    two segments fitted. The two gestures fit the window's two parts better than one fits
+    it: both are read (:meth:`Refiner._two`), as a shaped segment's motion is."""
+    from bench.learning_protocol import stream
+    from doodle.input.loader import load
+    from grammar.recognizer import load_actions, recognize
+
+    gestures = ["backflip", "cartwheel_left", "cartwheel_right", "fly_eagle", "golf_swing", "hook_left", "hook_right",
+                "left_right_left_combo", "right_left_right_combo", "uppercut_left", "uppercut_right"]
+    class InOrder:
+        def permutation(self, n):
+            return np.arange(n)
+
+    for user, takes in (("Sub_U002", (("hook_left", 3), ("backflip", 3), ("uppercut_left", 4), ("uppercut_right", 4))),
+                        ("Sub_U005", (("uppercut_right", 3), ("cartwheel_left", 4), ("hook_left", 4),
+                                      ("golf_swing", 3)))):
+        lib, files = _learn_all(tmp_path / user, gestures, user)
+        pieces = [(g, load(files[g][k], convention="unity").select(["c0"])) for g, k in takes]
+        doodle, spans = stream(pieces, InOrder(), False)
+        found = recognize(doodle, load_actions(lib, True))["c0"][1]
+        assert [s.action for s in found if s.action not in ("unknown", "Idle")] == [g for g, _ in takes], user
+
+
 @pytest.mark.parametrize("idle,builtin", [(True, False), (False, False), (True, True), (False, True)])
 def test_streaming_refiner_equals_batch_across_gestures(tmp_path, idle, builtin):
     """Several performances in one stream, with pauses between them or back to back (and
