@@ -145,8 +145,9 @@ def _recording_pace(data) -> None:
             result = record(source, Path(tmp) / f"{recognise}.doodle", compiled=compiled, recognise=recognise)
             waits = np.diff(source.polls[1:])  # from the first frame's poll on
             expected = int(PACE_SECONDS * doodle.rate)
-            print(f"    {label:<24} polls more than a period late {int((waits > 2 / doodle.rate).sum()):3d}, longest wait "
-                  f"{waits.max() * 1e3:5.1f} ms; samples {result.samples} of {expected}")
+            late = int((waits > 2 / doodle.rate).sum())
+            print(f"    {label:<24} polls more than a period late {late:3d}, longest wait {waits.max() * 1e3:5.1f} ms; "
+                  f"samples {result.samples} of {expected}")
 
 
 def _segmenter_only(doodle) -> np.ndarray:

@@ -13,8 +13,9 @@ that thread, except ``"started"`` and ``"stopped"``, and in order —; ``payload
 * ``"token"`` — ``track``, ``token``, ``start``, ``end`` (s), ``final``: a token completed
   (``final=True``) or a new token in progress (``final=False``, for live feedback);
 * ``"action"`` — ``track``, ``action``, ``start``, ``end`` (s), ``exact``, ``distance``, ``at``
-  (the time of the frame whose recognition found it: recognition may run behind the recording); an interaction's roles come once more, with
-  ``interaction`` and ``role``, once the interaction is decided;
+  (the time of the frame whose recognition found it: recognition may run behind the
+  recording); an interaction's roles come once more, with ``interaction`` and ``role``, once
+  the interaction is decided;
 * ``"provisional"`` — the same fields, before that: an action as soon as the tokens so far
   say it (:class:`grammar.recognizer.Live`; ``start`` and ``end`` as they stand — a pause's
   end is where it has got to), which the ``"action"`` that decides it may name differently;
@@ -168,6 +169,10 @@ class _Behind:
                 except BaseException as e:  # re-raised in the recording loop
                     self.error = e
 
+    @property
+    def actions(self) -> dict:
+        return self.live.actions
+
     def push(self, t: float, poses) -> None:
         if self.error is not None:
             raise self.error
@@ -271,4 +276,4 @@ def record(source, path, *, clock=time.monotonic, sleep=time.sleep, wait_for_tri
         if t0 is None and wait_for_trigger:
             raise DoodleError(f"{path}: the trigger was never pressed; nothing recorded")
         raise DoodleError(f"{path}: recording stopped after {len(times)} sample(s); nothing recorded")
-    return RecordResult(path, len(times), times[-1], live.live.actions, reason, result)
+    return RecordResult(path, len(times), times[-1], live.actions, reason, result)
