@@ -35,6 +35,7 @@ from bench.timing import cpu_per_frame
 from doodle.app.replay import latencies, replay
 from doodle.core.model import Doodle, Track
 from doodle.input.loader import load
+from doodle.input.sources import SyntheticSource
 from grammar.recognizer import load_actions
 
 DEMO = Path(__file__).resolve().parents[1] / "examples" / "demo.doodle"
@@ -112,24 +113,26 @@ def _real() -> None:
 PACE_SECONDS = 15.0
 
 
+class OfTheMoment(SyntheticSource):
+    """A doodle's sample at the current time on the real clock — as SteamVR gives poses: a
+    sample not read on its tick is never read — up to its ``samples``-th; the times it was
+    polled at in ``polls``."""
+
+    def __init__(self, doodle, samples: int):
+        super().__init__(doodle)
+        self.samples, self.start, self.polls = samples, None, []
+
+    def read(self):
+        now = time.monotonic()
+        self.start = now if self.start is None else self.start
+        self.polls.append(now)
+        self._i = int((now - self.start) * self.rate)
+        return super().read() if self._i < self.samples else None
+
+
 def _recording_pace(data) -> None:
     from bench.learning_protocol import make_library, stream
     from doodle.app.recorder import record
-    from doodle.input.sources import SyntheticSource
-
-    class OfTheMoment(SyntheticSource):
-        """The stream's sample at the current time on the real clock, as SteamVR gives poses."""
-
-        def __init__(self, doodle):
-            super().__init__(doodle)
-            self.start, self.polls = None, []
-
-        def read(self):
-            now = time.monotonic()
-            self.start = now if self.start is None else self.start
-            self.polls.append(now)
-            self._i = int((now - self.start) * self.rate)
-            return super().read() if self._i < PACE_SECONDS * self.rate else None
 
     user = sorted(data)[min(2, len(data) - 1)]
     classes = sorted(data[user])
@@ -141,7 +144,7 @@ def _recording_pace(data) -> None:
                            np.random.default_rng(0), idle=False)
         compiled = load_actions(folder, True)
         for label, recognise in (("recognising", True), ("floor, recognition off", False)):
-            source = OfTheMoment(doodle)
+            source = OfTheMoment(doodle, int(PACE_SECONDS * doodle.rate))
             result = record(source, Path(tmp) / f"{recognise}.doodle", compiled=compiled, recognise=recognise)
             waits = np.diff(source.polls[1:])  # from the first frame's poll on
             expected = int(PACE_SECONDS * doodle.rate)

@@ -58,9 +58,9 @@ class Refiner:
     two learned actions fit the motion's two parts better than one fits it (:meth:`_two`):
     then both are read, back to back (with no pause within :data:`SPOT_MAX` tokens, the
     segment's own tokens are tried so, and the best window too where it reaches over the
-    next segment). With none, the segment's own tokens are searched as an
-    unknown run's are (two gestures or one); failing that, it is unknown. A window may also take back up to
-    :data:`UNKNOWN_REACH` tokens of the unknown run before it, or reach as far into the
+    next segment). With none, the segment's own tokens are searched as an unknown run's
+    are (two gestures or one); failing that, it is unknown. A window may also take back up
+    to :data:`UNKNOWN_REACH` tokens of the unknown run before it, or reach as far into the
     unknown run after it. Tokens a window takes from the next segment are taken from it;
     tokens it gives up are unknown. An unknown run of :data:`SPOT_TOKENS` tokens or more
     is searched the same way — one longer than :data:`SPOT_MAX` a part at a time, each
@@ -69,9 +69,9 @@ class Refiner:
     searched again (:meth:`_spots`). Other segments pass through
     (less any tokens taken) — but a built-in action's segment in a motion the Matcher read
     in pieces is the learned action that fits the whole motion, if one does (or two that
-    fit its two parts better, back to back), or else the
-    one that fits the segment with the pieces beside it, cutting no other built-in segment
-    (:meth:`_over_builtin`, :meth:`_among_pieces`); it waits for the pause ending its motion
+    fit its two parts better, back to back), or else the one that fits the segment with
+    the pieces beside it, cutting no other built-in segment (:meth:`_over_builtin`,
+    :meth:`_among_pieces`); it waits for the pause ending its motion
     and for the Matcher's segments as far as such a window may reach. A shaped
     segment is decided once the pause ending its motion is known (or :data:`SPOT_MAX`
     tokens have passed without one). An unknown run whose
@@ -212,10 +212,9 @@ class Refiner:
         when it fits — or two learned gestures back to back, when they explain the motion
         better than that one (:meth:`_two`). The Matcher reads a learned gesture's tokens —
         a new performance's, 5 to 10 edits from its examples' — as the few-token expressions
-        of built-in actions as
-        readily as its own (a cartwheel as Dodge then Block, a hook as Walk Back then Side
-        Walk Right): the tokens cannot tell them apart, and built-in actions have no shapes
-        to. A motion between pauses that the Matcher read in pieces — several segments, or
+        of built-in actions as readily as its own (a cartwheel as Dodge then Block, a hook as
+        Walk Back then Side Walk Right): the tokens cannot tell them apart, and built-in
+        actions have no shapes to. A motion between pauses that the Matcher read in pieces — several segments, or
         one with unknown tokens beside it — and that a learned action's shape fits whole,
         within its rejection distance and its examples' durations, is that action, the one
         the user taught. A motion read whole as one built-in action stays that action — a

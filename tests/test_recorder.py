@@ -150,6 +150,7 @@ def test_slow_recognition_leaves_no_hole_in_a_live_recording(tmp_path, automaton
     """A live source gives only the pose of the moment (SteamVR): the recorder must poll it on
     every tick, however long recognising a frame takes (deciding a learned action can take a
     few tenths of a second). Recognition stalls here for 0.3 s on one frame, on the real clock."""
+    from bench.replay_latency import OfTheMoment
     from grammar import recognizer
 
     doodle = two_tracks()
@@ -164,14 +165,7 @@ def test_slow_recognition_leaves_no_hole_in_a_live_recording(tmp_path, automaton
 
     monkeypatch.setattr(recognizer.Live, "push", stalling)
 
-    class OfTheMoment(SyntheticSource):  # the doodle's sample at the current time, as SteamVR gives
-        def read(self):
-            now = time.monotonic()
-            self.start = getattr(self, "start", now)
-            self._i = int((now - self.start) * self.rate)
-            return super().read() if self._i < 60 else None
-
-    result = record(OfTheMoment(doodle), tmp_path / "live.doodle", compiled=automaton)
+    result = record(OfTheMoment(doodle, 60), tmp_path / "live.doodle", compiled=automaton)
     t = load(tmp_path / "live.doodle").t
     assert len(pushes) == result.samples == len(t)  # every frame recorded was recognised
     assert np.diff(t).max() < slow / 2  # polled on every tick meanwhile: no hole of the stall's length

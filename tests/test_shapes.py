@@ -81,6 +81,8 @@ def _learn_all(tmp_path, gestures, user="Sub_U001"):
     return lib, files
 
 
+ALL_GESTURES = ["backflip", "cartwheel_left", "cartwheel_right", "fly_eagle", "golf_swing", "hook_left", "hook_right",
+                "left_right_left_combo", "right_left_right_combo", "uppercut_left", "uppercut_right"]  # every user's
 CONFUSED = ["hook_right", "golf_swing", "uppercut_left", "uppercut_right", "left_right_left_combo",
             "right_left_right_combo"]  # Sub_U005's: token strings alone mistake five of their held-out takes
 
@@ -355,8 +357,7 @@ def test_learned_gestures_back_to_back_beside_built_in_ones(tmp_path):
     from doodle.input.loader import load
     from grammar.recognizer import load_actions, recognize
 
-    gestures = ["backflip", "cartwheel_left", "cartwheel_right", "fly_eagle", "golf_swing", "hook_left", "hook_right",
-                "left_right_left_combo", "right_left_right_combo", "uppercut_left", "uppercut_right"]
+    gestures = ALL_GESTURES
     lib, files = _learn_all(tmp_path, gestures, "Sub_U005")
     compiled = load_actions(lib, True)
     for takes in ((("right_left_right_combo", 4), ("cartwheel_right", 4), ("hook_right", 4)),
@@ -378,8 +379,8 @@ def test_two_learned_gestures_in_one_motion_of_built_in_pieces(tmp_path):
     from doodle.input.loader import load
     from grammar.recognizer import load_actions, recognize
 
-    gestures = ["backflip", "cartwheel_left", "cartwheel_right", "fly_eagle", "golf_swing", "hook_left", "hook_right",
-                "left_right_left_combo", "right_left_right_combo", "uppercut_left", "uppercut_right"]
+    gestures = ALL_GESTURES
+
     class InOrder:
         def permutation(self, n):
             return np.arange(n)
