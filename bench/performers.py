@@ -29,7 +29,7 @@ from pathlib import Path
 
 import numpy as np
 
-from doodle.synth.performers import GESTURES, MAIN_EXAMPLE, perform, style_grid
+from doodle.synth.performers import GESTURES, MAIN_EXAMPLE, perform, perform_two, style_grid
 from grammar.recognizer import load_actions, recognize
 from doodle.input.segmenter import SegmenterParams
 
@@ -160,6 +160,51 @@ def _beside_one(job) -> tuple[str, list, list, Counter]:
     return user, beside, without, taken
 
 
+def _beside_two(job) -> tuple[str, list, list, int]:
+    """Two performers of built-in actions (one per track) read with one user's gestures
+    learned with both hands beside the built-in actions, and with the built-in actions
+    alone: per scene and track, whether its actions were read exactly; learned names given."""
+    import tempfile
+
+    from bench.learning_protocol import load as load_vive, make_library
+
+    user, scenes = job
+    data = load_vive()[user]
+    with tempfile.TemporaryDirectory() as tmp:
+        folder = make_library(Path(tmp) / user, {g: ds[:3] for g, ds in sorted(data.items())}, ("c0", "c1"))
+        learned, alone = load_actions(folder, True), load_actions()
+        beside, without, taken = [], [], 0
+        for first, second, style, seed in scenes:
+            doodle = perform_two(first, second, style, seed)
+            for compiled, into in ((learned, beside), (alone, without)):
+                found = recognize(doodle, compiled)
+                for track, want in (("c0", first), ("c1", second)):
+                    got = [getattr(s, "interaction", None) or s.action for s in found[track][1]
+                           if s.action not in ("Idle", "unknown")]
+                    into.append(got == [a for a in want if a != "Idle"])
+                    if compiled is learned:
+                        taken += sum(g in data for g in got)
+    return user, beside, without, taken
+
+
+def beside_two_handed(users) -> None:
+    """Two characters, one per track, each performing three random built-in actions
+    (Idle between, two takes per style), read with each Vive user's gestures learned with
+    both hands (``--tracks c0,c1``) beside the built-in actions, against the built-in
+    actions alone: a two-handed action must not take one character's action because the
+    other moved at the same time."""
+    rng = np.random.default_rng(11)
+    scenes = [(("Idle", *rng.choice(ACTIONS, 3), "Idle"), ("Idle", *rng.choice(ACTIONS, 3), "Idle"), style,
+               900 + 10 * k + j) for k, style in enumerate(style_grid()) for j in range(2)]
+    with ProcessPoolExecutor(max_workers=2) as pool:
+        rows = list(pool.map(_beside_two, [(u, scenes) for u in users]))
+    print(f"  two performers beside a two-handed library ({len(scenes)} scenes × 2 tracks of 3 built-in actions; "
+          "each user's gestures learned on c0+c1): tracks read exactly, beside the built-in actions alone")
+    for user, beside, without, taken in rows:
+        print(f"    {user.replace('Sub_', ''):<6} {rate(beside):.3f} (alone {rate(without):.3f}); "
+              f"learned names given: {taken}")
+
+
 def beside_learned() -> None:
     """Built-in actions performed with a user library beside them: each of the five Vive
     users' gestures learned on c0 from ex_0..2 (``bench.learning_protocol``), the main
@@ -192,6 +237,7 @@ def beside_learned() -> None:
         common = ", ".join(f"{g} in {what} ×{n}" for (g, what), n in taken.most_common(3))
         print(f"    {user.replace('Sub_', ''):<6} {rate(beside[:first]):.3f}, back to back {rate(beside[first:]):.3f}; "
               f"learned names given: {sum(taken.values())}" + (f" ({common})" if common else ""))
+    beside_two_handed(users)
 
 
 def main(quick: bool = False) -> dict:

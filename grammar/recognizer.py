@@ -18,6 +18,7 @@ the Matcher's segments (:mod:`grammar.matcher`) → learned actions re-decided b
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -29,7 +30,7 @@ from grammar.constraints import RADIUS
 from grammar.contexter import InteractionSegment, LiveContexter, Refused, apply_behaviour, behaviours, with_interactions
 from grammar.library import Compiled, compile_library
 from grammar.matcher import Matcher, Segment, match
-from grammar.refiner import Refiner, refine
+from grammar.refiner import Refiner, refine, unread
 from library.manifest import load_combined
 
 
@@ -55,16 +56,17 @@ def recognize(doodle, compiled: Compiled, params: SegmenterParams = SegmenterPar
     states applied (:func:`decide`)."""
     tokens = tokenize_doodle(doodle, params)
     automata = track_automata(compiled, list(tokens), threshold, direction_costs)
+    matched = {name: match(toks, automata[name], name) if automata[name] is not None else unmatched(toks)
+               for name, toks in tokens.items()}  # a track with no automaton only partners two-handed actions
     result = {}
     for name, toks in tokens.items():
-        if automata[name] is None:  # a track that only partners two-handed actions
-            result[name] = (toks, unmatched(toks))
-            continue
-        segments = match(toks, automata[name], name)
-        if compiled.shapes is not None:  # learned actions re-decided by their examples' shapes
+        segments = matched[name]
+        if compiled.shapes is not None and automata[name] is not None:  # learned actions re-decided by their shapes
             track = doodle.track(name)
             others = {o: (doodle.track(o).p, doodle.track(o).q, doodle.track(o).valid) for o in tokens if o != name}
-            segments = refine(segments, toks, track.p, track.valid, compiled.shapes, name, track.q, others, track.t)
+            partners = {o: (unread(tokens[o], matched[o]), math.inf) for o in tokens if o != name}
+            segments = refine(segments, toks, track.p, track.valid, compiled.shapes, name, track.q, others, track.t,
+                              partners)
         result[name] = (toks, segments)
     return decide(doodle, compiled, result, threshold, interactions)
 
@@ -105,6 +107,21 @@ def with_pairs(compiled: Compiled, result: dict) -> dict:
             if other in result:
                 out[other] = overlay(out[other], result[other][0], s, role)
     return {name: (toks, out[name]) for name, (toks, _) in result.items()}
+
+
+def _owners(compiled: Compiled | None, names: list[str]) -> dict:
+    """Each of ``names`` that two-handed learned actions also read → the tracks of ``names``
+    those actions are decided on."""
+    shapes = compiled.shapes if compiled is not None else None
+    out = {}
+    if shapes is None or not shapes.partners:
+        return out
+    bound = shapes.tracks or (None,) * len(shapes.names)
+    for b, others in zip(bound, shapes.partners):
+        for o in others:
+            if o in names:
+                out.setdefault(o, set()).update(n for n in names if n != o and (b is None or n == b))
+    return {o: own for o, own in out.items() if own}
 
 
 def _role(s: Segment, first: int, stop: int, role: int) -> InteractionSegment:
@@ -222,7 +239,8 @@ class _Chain:
     """One track's Segmenter → Matcher → Refiner, from sample ``offset`` of the stream."""
 
     def __init__(self, live: "Live", name: str, offset: int):
-        self.name, self.offset = name, offset
+        self.name, self.offset, self.live = name, offset, live
+        live.read[name] = (live.read[name][0], offset)  # its Matcher has read nothing of what follows yet
         self.segmenter = Segmenter(live.rate, live.params, name, live.source)
         self.tokens_only = live.compiled is None  # nothing to recognise: tokens only
         auto = None if self.tokens_only else live.automata[name]
@@ -233,6 +251,7 @@ class _Chain:
                         if shapes is not None and auto is not None else None)
         self.tokens: list[Token] = []
         self.segments: list[Segment] = []
+        self.finished = False  # its tokens and segments moved to the Live's (closed, or restarted)
         self._held = None  # what the provisional segments were last worked out from
         self._refined_from, self._refined_to = None, []  # the Matcher's provisional segments, refined
 
@@ -241,18 +260,51 @@ class _Chain:
             self.tokens += tokens
             return []
         segments = []
-        if self.matcher is None:
+        if self.matcher is None:  # every token unknown as it comes
             self.tokens += tokens
+            self._matched(unmatched(tokens), len(self.tokens) - len(tokens))
             if close:
-                segments = unmatched(self.tokens)
+                segments = self.end_refining(tape, self.end_matching())
             self.segments += segments
             return segments
         for token in tokens:
             self.tokens.append(token)
-            segments += self._refined(self.matcher.push(token), tape, token)
+            segments += self._refined(self._matched(self.matcher.push(token)), tape, token)
         if close:
-            segments += self._refined(self.matcher.close(), tape, None, close=True)
+            segments += self.end_refining(tape, self.end_matching())
         self.segments += segments
+        return segments
+
+    def end_matching(self) -> list[Segment]:
+        """The Matcher closed: its last segments (for :meth:`end_refining`)."""
+        if self.tokens_only:
+            return []
+        if self.matcher is None:  # its unknown tokens told as they came
+            self.live.read[self.name] = (self.live.read[self.name][0], math.inf)
+            return unmatched(self.tokens)
+        return self._matched(self.matcher.close(), final=True)
+
+    def end_refining(self, tape: _Tape, segments: list[Segment]) -> list[Segment]:
+        """The Refiner given the Matcher's last ``segments`` and closed: the segments it decides."""
+        return self._refined(segments, tape, None, close=True)
+
+    def nudge(self, tape: _Tape) -> list[Segment]:
+        """The segments the Refiner decides now that other tracks' Matchers have read further."""
+        if self.refiner is None or not self.refiner.waiting_for_partners:
+            return []
+        segments = self._refined([], tape, None)
+        self.segments += segments
+        return segments
+
+    def _matched(self, segments: list[Segment], shift: int = 0, final: bool = False) -> list[Segment]:
+        """The Matcher's new segments (token indices from ``shift``), told to the other tracks'
+        Refiners (sample indices of the stream: :attr:`Live.read`)."""
+        spans, known = self.live.read[self.name]
+        if segments:
+            off = self.offset
+            spans += [(a + off, b + off) for a, b in unread(self.tokens[shift:], segments)]
+            known = segments[-1].end + off
+        self.live.read[self.name] = (spans, math.inf if final else known)
         return segments
 
     def _refined(self, segments: list[Segment], tape: _Tape, token, close: bool = False) -> list[Segment]:
@@ -272,6 +324,8 @@ class _Chain:
         for other in refiner.others:
             o = tape.track(other)
             refiner.others[other] = (o.p[k:], o.q[k:], o.valid[k:])
+            refiner.partners[other] = self.live.read[other]
+        refiner.shift = k
 
     def due(self) -> bool:
         """Whether what the Segmenter holds back has changed since :meth:`provisional` last read it."""
@@ -324,7 +378,10 @@ class Live:
     :meth:`push` one frame (a time and one ``(p, q, ok)`` per track) at a time; it returns
     what became final (a :class:`Step`): each track's segments as the Matcher and Refiner
     decide them, with behaviour states applied per track as they come, and an interaction's
-    roles once every track has decided past it. :meth:`close` ends the stream and returns
+    roles once every track has decided past it; a track that two-handed learned actions
+    also read has its segments heard once the tracks deciding those actions have decided
+    past them, less those a two-handed action heard there covers (as :func:`with_pairs`
+    lays it over them in the batch). :meth:`close` ends the stream and returns
     the rest; :attr:`result` is then the whole performance decided as :func:`recognize`
     decides it. With ``restart``, a track whose samples the Segmenter refuses (tracking back
     after a gap too long to bridge) starts afresh at that frame, what came before staying
@@ -351,11 +408,16 @@ class Live:
             automata = track_automata(compiled, self.names, threshold) if compiled is not None else {}
         self.automata = automata
         self.tape = _Tape(self.names)
+        self.read = {n: ([], 0) for n in self.names}  # per track: movement its Matcher read as no action, final to
         self.chains = {n: _Chain(self, n, 0) for n in self.names}
         self._done = {n: ([], []) for n in self.names}  # tokens and segments of finished chains, shifted
         self._rules = behaviours(compiled) if compiled is not None else {}
         self._pairs = two_handed(compiled) if compiled is not None else {}
         self._laying = []  # two-handed segments still to be heard on their other tracks
+        self._owners = _owners(compiled, self.names)  # a track two-handed actions read → the tracks deciding them
+        self._decided = {n: -1 for n in self.names}  # sample up to which a track's segments were heard
+        self._holding = {n: [] for n in self.names}  # a partner track's final segments, until its owners decide
+        self._covered = {n: [] for n in self.names}  # samples of two-handed actions heard, laid over a partner
         self._state = {n: frozenset(compiled.library.states if compiled is not None else ()) for n in self.names}
         self._shown = {n: [] for n in self.names}  # the provisional segments last reported, per track
         self._turn = 0  # the track whose provisional actions are worked out first at the next frame
@@ -388,6 +450,10 @@ class Live:
                 tokens[name] = old
             tokens[name] = tokens.get(name, []) + self._global(name, new)
             heard += self._heard(name, self.chains[name].feed(new, self.tape), new)
+        if self._pairs:  # a Refiner waiting for what another track's Matcher read there
+            for name in self.names:
+                heard += self._heard(name, self.chains[name].nudge(self.tape), [])
+            heard += self._release()
         if self._laying:
             heard += self._lay()
         return Step(tokens, heard, restarted, self._provisional_labels() if self.provisional else [])
@@ -435,9 +501,11 @@ class Live:
         """End every track; ``flush[name]`` False ends a track where its classification
         stands (tracking lost for good at the end), without the samples still being smoothed."""
         tokens, heard = {}, []
-        for name in self.names:
-            tokens[name], new = self._finish(name, True if flush is None else flush.get(name, True))
+        ends = {name: self._end_matching(name, True if flush is None else flush.get(name, True)) for name in self.names}
+        for name in self.names:  # every Matcher closed first: a Refiner may read what the others' found
+            tokens[name], new = self._end_refining(name, *ends[name])
             heard += new
+        heard += self._release(final=True)
         heard += self._lay(final=True)
         if self._contexter is not None:
             heard += self._interactions(self._contexter.close())
@@ -450,6 +518,11 @@ class Live:
         return [Token(k.name, k.start + off, k.end + off) for k in tokens] if off else list(tokens)
 
     def _finish(self, name: str, flush: bool) -> tuple[list[Token], list[Heard]]:
+        return self._end_refining(name, *self._end_matching(name, flush))
+
+    def _end_matching(self, name: str, flush: bool) -> tuple[list[Token], list[Segment], list[Segment]]:
+        """A track's Segmenter and Matcher closed: its last tokens, the segments decided on the
+        way and the Matcher's last segments (not refined yet)."""
         chain = self.chains[name]
         tokens = []
         if flush:
@@ -459,11 +532,20 @@ class Live:
                 flush = False
         if not flush:
             tokens = chain.segmenter.cut()
-        heard = self._heard(name, chain.feed(tokens, self.tape, close=True), tokens)
+        return tokens, chain.feed(tokens, self.tape), chain.end_matching()
+
+    def _end_refining(self, name: str, tokens: list[Token], decided: list[Segment],
+                      last: list[Segment]) -> tuple[list[Token], list[Heard]]:
+        """A track's Refiner closed after :meth:`_end_matching`: its last tokens and what was heard."""
+        chain = self.chains[name]
+        segments = chain.end_refining(self.tape, last)
+        chain.segments += segments
+        heard = self._heard(name, decided + segments, tokens)
         done_tokens, done_segments = self._done[name]
         shift = len(done_tokens)
         done_tokens += self._global(name, chain.tokens)
         done_segments += [_shifted(s, chain.offset, shift) for s in chain.segments]
+        chain.finished = True
         return self._global(name, tokens), heard
 
     def _heard(self, name: str, segments: list[Segment], tokens: list[Token]) -> list[Heard]:
@@ -474,6 +556,47 @@ class Live:
         if self._contexter is not None:
             for token in self._global(name, tokens):
                 out += self._interactions(self._contexter.push_token(name, token))
+        if segments:
+            self._decided[name] = max(self._decided[name], segments[-1].end)
+        if name in self._owners:  # heard once the tracks deciding its two-handed actions have decided past it
+            self._holding[name] += segments
+            return out
+        return out + self._hear(name, segments)
+
+    def _known(self, name: str) -> list[Token]:
+        """A track's tokens so far (sample indices of the stream)."""
+        chain = self.chains[name]
+        return self._done[name][0] + ([] if chain.finished else self._global(name, chain.tokens))
+
+    def _release(self, final: bool = False) -> list[Heard]:
+        """A partner track's held segments heard, as far as the tracks deciding its
+        two-handed actions have decided (all at the end): less the actions a two-handed one
+        heard there covers for at least half of their tokens (it is laid over them, as
+        :func:`overlay` does in the batch)."""
+        out = []
+        for name, owners in self._owners.items():
+            held = self._holding[name]
+            upto = math.inf if final else min(self._decided[o] for o in owners)
+            n = 0
+            while n < len(held) and held[n].end <= upto:
+                n += 1
+            if not n:
+                continue
+            ready, self._holding[name] = held[:n], held[n:]
+            known = self._known(name)
+            starts = np.array([k.start for k in known], dtype=np.int64)
+            ends = np.array([k.end for k in known], dtype=np.int64)
+            spans = [(int(np.searchsorted(ends, a, side="right")), int(np.searchsorted(starts, b, side="left")))
+                     for a, b in self._covered[name]]
+            kept = [s for s in ready if s.action == "unknown"
+                    or all(2 * (min(s.stop, b) - max(s.first, a)) < s.stop - s.first for a, b in spans)]
+            out += self._hear(name, kept)
+        return out
+
+    def _hear(self, name: str, segments: list[Segment]) -> list[Heard]:
+        """A track's final segments heard: interactions, behaviour states, two-handed actions."""
+        out = []
+        if self._contexter is not None:
             out += self._interactions(self._contexter.push_segments(name, segments))
         for s in segments:
             rule = self._rules.get(s.action)
@@ -485,6 +608,8 @@ class Live:
                                 refused=s.action, reason=rule.why(self._state[name]))
             if s.action in self._pairs and not isinstance(s, (Refused, InteractionSegment)):
                 out.append(Heard(name, _role(s, s.first, s.stop, 0)))  # one gesture, heard on every track
+                for other in self._pairs[s.action]:
+                    self._covered.get(other, []).append((s.start, s.end))
                 self._laying += [(s, role, other) for role, other in enumerate(self._pairs[s.action], 1)
                                  if other in self.chains]  # once the other track's tokens reach its end
                 continue
@@ -496,7 +621,7 @@ class Live:
         their end (at the end of the stream, as far as they go)."""
         out, waiting = [], []
         for s, role, other in self._laying:
-            known = self._done[other][0] + self._global(other, self.chains[other].tokens)
+            known = self._known(other)
             if not final and (not known or known[-1].end < s.end):
                 waiting.append((s, role, other))
                 continue

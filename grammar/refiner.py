@@ -14,6 +14,7 @@ Streaming (:class:`Refiner`, pushed segments as the Matcher gives them) equals b
 
 from __future__ import annotations
 
+import bisect
 import copy
 from dataclasses import replace
 
@@ -32,11 +33,20 @@ TEMPO = 1.5  # a window is not an action when it lasts over this × its longest 
 
 def refine(segments: list, tokens: list, p: np.ndarray, valid: np.ndarray, shapes: ShapeSet,
            track: str | None = None, q: np.ndarray | None = None, others: dict | None = None,
-           t: np.ndarray | None = None) -> list:
+           t: np.ndarray | None = None, partners: dict | None = None) -> list:
     """Batch form of :class:`Refiner`: every segment of a track re-decided."""
-    refiner = Refiner(shapes, p, valid, track, q, others, t)
+    refiner = Refiner(shapes, p, valid, track, q, others, t, partners)
     refiner.tokens.extend(tokens)
     return refiner.push(segments) + refiner.close()
+
+
+def unread(tokens: list, segments: list) -> list[tuple[int, int]]:
+    """The samples ``(start, end)`` of a track's movement its Matcher read as no action: the
+    tokens other than pauses in its unknown segments."""
+    from grammar.matcher import UNKNOWN
+
+    return [(k.start, k.end) for s in segments if s.action == UNKNOWN for k in tokens[s.first:s.stop]
+            if k.name != "T_STILL"]
 
 
 class Refiner:
@@ -86,14 +96,25 @@ class Refiner:
     and ``valid`` the track's samples, at least as far as the tokens go; ``track`` its name
     (actions bound to other tracks are not considered); ``others`` the other tracks'
     samples, ``{name: (p, q, valid)}`` over the same sample times, read by two-handed
-    actions recognised on this track (a window's shape is both hands' over its samples).
+    actions recognised on this track (a window's shape is both hands' over its samples);
+    ``partners`` what the other tracks' Matchers made of them, ``{name: (spans, known)}``:
+    the samples of their movement read as no action (:func:`unread`, in order) and the sample
+    up to which that is final — counted from :attr:`shift` samples before this track's first.
+    A built-in segment waits until they are final as far as its motion goes, when two-handed
+    learned actions are read on this track.
     """
 
     def __init__(self, shapes: ShapeSet, p: np.ndarray, valid: np.ndarray, track: str | None = None,
-                 q: np.ndarray | None = None, others: dict | None = None, t: np.ndarray | None = None):
+                 q: np.ndarray | None = None, others: dict | None = None, t: np.ndarray | None = None,
+                 partners: dict | None = None):
         self.shapes, self.p, self.valid, self.q, self.t = shapes, p, valid, q, t
         self.track, self.others = track, dict(others or {})
+        self.partners = dict(partners or {})
+        self.shift = 0  # samples of the stream before this track's first (the partners' indices count from it)
+        self.waiting_for_partners = False  # whether the next segment waits for the other tracks' Matchers
         self._allowed = shapes.allowed(track, set(self.others) | {track})
+        pairs = shapes.partners or ((),) * len(shapes.names)
+        self._paired = {o for k, others in enumerate(pairs) if self._allowed[k] for o in others}  # tracks read too
         self.tokens: list = []
         self._waiting: list = []
         self._done = 0  # tokens before this are decided
@@ -103,11 +124,13 @@ class Refiner:
         """An independent copy (what it is pushed leaves this one as it is)."""
         other = copy.copy(self)
         other.tokens, other._waiting, other.others = list(self.tokens), list(self._waiting), dict(self.others)
+        other.partners = dict(self.partners)
         return other
 
     def push(self, segments: list) -> list:
         """Segments from the Matcher (in order) → segments decided so far."""
         self._waiting += segments
+        self.waiting_for_partners = False
         out = []
         while self._waiting and self._ready():
             after = self._waiting[1] if len(self._waiting) > 1 else None
@@ -124,7 +147,11 @@ class Refiner:
         if first.action not in self.shapes.names:  # a built-in: its motion's end decides whether a learned one fits it
             if not self._moving(first):
                 return True
-            if self._motion(first, len(self.tokens), False) == "pending":
+            motion = self._motion(first, len(self.tokens), False)
+            if motion == "pending":
+                return False
+            if motion is not None and not self._partners_reach(self.tokens[motion[1] - 1].end):
+                self.waiting_for_partners = True  # what the other hands' Matchers read there decides
                 return False
             return self._pieces(first, self._waiting[1:], len(self.tokens), False) is not None
         if len(self._waiting) < 2:  # the next segment decides how far a window may reach
@@ -223,7 +250,10 @@ class Refiner:
         whose shape fits the whole motion also reads its tokens with no more edits than the
         built-in one does: then the tokens do not prefer the built-in action, and the shape
         is the user's (an uppercut read as Stop at two edits, which the uppercut's own
-        expression reads at two as well). A motion that no learned action fits whole — no
+        expression reads at two as well) — or the learned action is two-handed, its shape fits
+        both hands, and the other hand's Matcher read its movement over that window as no
+        action at all (not even a built-in one): the built-in reading leaves that hand
+        unexplained, the two-handed action explains both. A motion that no learned action fits whole — no
         pause bounds it (back to back), or it holds more than one gesture — is searched
         around the segment instead (:meth:`_among_pieces`)."""
         if not self._moving(seg):
@@ -237,8 +267,8 @@ class Refiner:
         moving = [i for i in range(first, seg.stop) if self.tokens[i].name != "T_STILL"]
         if (moving[0], moving[-1] + 1) == (a, b):  # read whole as this action: it stays, unless …
             whole = self._best([a], [(b, b)], known, motion=motion, across=False) if seg.distance is not None else None
-            if whole is None or whole[3] > seg.distance:  # … a learned one reads it as well
-                return []
+            if whole is None or (whole[3] > seg.distance and not self._partner_unread(whole)):  # … a learned
+                return []  # one reads it as well, or a two-handed one fits hands the Matchers read as nothing
         else:
             whole = self._best(range(a, min(b, a + TRIM + 1)), [(max(a + 1, b - TRIM), b)], known, motion=motion,
                                across=False)
@@ -246,6 +276,25 @@ class Refiner:
                 return self._among_pieces(seg, first, known)
         two = self._two(motion, known)  # or two learned gestures back to back, as a shaped segment's motion may be
         return list(two) if two is not None else [whole]
+
+    def _partners_reach(self, sample: int) -> bool:
+        """Whether the other tracks' Matchers are final up to ``sample`` (those two-handed
+        actions read here also read; a track whose reading is not given is not waited for)."""
+        return all(o not in self.partners or self.partners[o][1] >= sample + self.shift for o in self._paired)
+
+    def _partner_unread(self, window) -> bool:
+        """Whether ``(first, stop, action, edits)``'s action is two-handed and one of its
+        other tracks moved, over the window's samples, in a way its Matcher read as no action."""
+        pairs = self.shapes.partners
+        if not pairs or not pairs[window[2]]:
+            return False
+        a, b = self.tokens[window[0]].start + self.shift, self.tokens[window[1] - 1].end + self.shift
+        for o in pairs[window[2]]:
+            spans = self.partners.get(o, ((), 0))[0]  # in order
+            i = bisect.bisect_right(spans, a, key=lambda span: span[1])  # the first ending after a
+            if i < len(spans) and spans[i][0] < b:
+                return True
+        return False
 
     def _pieces(self, seg, after: list, known: int, closed: bool):
         """The windows :meth:`_among_pieces` reads around a built-in segment, ``(starts,

@@ -347,6 +347,53 @@ def test_a_motion_read_whole_as_a_built_in_action_is_the_learned_one_that_reads_
     assert named == ["uppercut_right"]
 
 
+def test_a_two_handed_gesture_one_hand_of_which_reads_as_a_built_in_action(tmp_path):
+    """Sub_U001's gestures learned with both hands (ex_0, ex_1, ex_4), the built-in actions
+    beside them: the right hand of the held-out hook_left (ex_2) reads whole as Crescent
+    Kick at two edits, the hook's own expression at three — but the hook's shape fits both
+    hands, and the left hand's Matcher read its movement there as no action. The two-handed
+    action explains both hands: it is the hook, on both tracks, live as in the batch."""
+    from bench.learning_protocol import load as load_vive, make_library
+    from doodle.app.replay import replay
+    from grammar.recognizer import load_actions, recognize
+
+    if not VIVE.is_dir():
+        pytest.skip("real Vive recordings not found")
+    user = load_vive(VIVE)["Sub_U001"]
+    lib = make_library(tmp_path / "mine", {g: [user[g][i] for i in (0, 1, 4)] for g in sorted(user)}, ("c0", "c1"))
+    compiled = load_actions(lib, True)
+    take = user["hook_left"][2]
+    batch = recognize(take, compiled)
+    for track in ("c0", "c1"):
+        assert [getattr(s, "interaction", s.action) for s in batch[track][1]
+                if s.action not in ("unknown", "Idle")] == ["hook_left"]
+    expected = sorted((name, s.action, float(take.track(name).t[s.start]))
+                      for name, (_, segs) in batch.items() for s in segs if s.action != "unknown")
+    assert sorted((r.track, r.action, r.start) for r in replay(take, compiled).found) == expected
+
+
+def test_two_performers_of_built_in_actions_beside_a_two_handed_library(tmp_path):
+    """Two characters each performing built-in actions (generated performers, one per
+    track), Sub_U007's gestures learned with both hands beside them: a two-handed action
+    whose shape fits both hands does not take a motion one hand's Matcher reads whole as a
+    built-in action while the other hand's movement is read as built-in actions too (each
+    character doing its own): every action of the first character is read."""
+    from bench.learning_protocol import load as load_vive, make_library
+    from doodle.synth.performers import perform_two, style_grid
+    from grammar.recognizer import load_actions, recognize
+
+    if not VIVE.is_dir():
+        pytest.skip("real Vive recordings not found")
+    user = load_vive(VIVE)["Sub_U007"]
+    lib = make_library(tmp_path / "mine", {g: user[g][:3] for g in sorted(user)}, ("c0", "c1"))
+    compiled = load_actions(lib, True)
+    style = next(s for s in style_grid() if s.label() == "size×0.7")
+    first = ("Idle", "Despair", "Back Flip", "Dance", "Idle")
+    doodle = perform_two(first, ("Idle", "Kick", "Pick up", "Side Walk Right", "Idle"), style, 920)
+    named = [s.action for s in recognize(doodle, compiled)["c0"][1] if s.action not in ("unknown", "Idle")]
+    assert named == [x for x in first if x != "Idle"]
+
+
 def test_learned_gestures_back_to_back_beside_built_in_ones(tmp_path):
     """Sub_U005's held-out takes back to back, with the built-in actions beside the learned
     ones: with no pause to bound a motion, the Matcher read a combo as Cast Fireball, Side

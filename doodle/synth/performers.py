@@ -325,3 +325,15 @@ def perform(actions, style: Style = Style(), seed: int = 0, name: str = "c0") ->
     track = Track(name, t, world, quat.make_continuous(q), np.ones(n, dtype=bool))
     return Doodle((track,), float(style.rate), "vive-controller", f"<performer {style.label()}>"), spans
 
+
+def perform_two(first, second, style: Style = Style(), seed: int = 0) -> Doodle:
+    """A two-track doodle of two performers, each playing its own built-in actions in
+    ``style``: ``first`` on track c0, ``second`` on c1 (its performer drawn from ``seed`` +
+    1000), sampled on the first one's clock (the second holds its last pose if it ends
+    sooner, and is cut if it lasts longer)."""
+    one, _ = perform(first, style, seed)
+    other, _ = perform(second, style, seed + 1000, name="c1")
+    a, b = one.tracks[0], other.tracks[0]
+    k = np.minimum(np.arange(len(a.t)), len(b.t) - 1)
+    c1 = Track("c1", a.t, b.p[k], b.q[k], np.ones(len(a.t), dtype=bool))
+    return Doodle((a, c1), one.rate, one.device, f"<performers {style.label()}>")
