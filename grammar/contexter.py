@@ -198,17 +198,32 @@ def with_interactions(doodle, compiled, recognised: dict, threshold: float = 2.0
     are ``interaction_only`` actions (the thesis's Slap ``(T_N_Z)+ T_Z``, Slapped
     ``T_STILL+``…) are matched on the track's tokens by a Matcher of their own, and where
     such an interaction is recognised its segment replaces the independent segments it
-    covers (interactions take priority, §6.2.1)."""
+    covers (interactions take priority, §6.2.1) — but not a learned action's (:func:`overrides`)."""
     from grammar.matcher import match
 
     segments = {tr: segs for tr, (_, segs) in recognised.items()}
     pools = {tr: list(segs) for tr, segs in segments.items()}
     if compiled.roles is not None:
         auto = compiled.roles.automaton(threshold)
-        for tr, (tokens, _) in recognised.items():
-            pools[tr] += [s for s in match(tokens, auto, tr) if s.action != "unknown"]
+        learned = learned_names(compiled)
+        for tr, (tokens, segs) in recognised.items():
+            mine = [o for o in segs if o.action in learned]
+            pools[tr] += [s for s in match(tokens, auto, tr) if s.action != "unknown" and not overrides(s, mine)]
     found = Contexter(compiled.library.interactions, radius, mode).select(doodle, pools)
     return splice(segments, pools, found)
+
+
+def learned_names(compiled) -> frozenset:
+    """The names of the learned actions (those with shapes) of a compiled library."""
+    return frozenset(compiled.shapes.names) if compiled.shapes is not None else frozenset()
+
+
+def overrides(s: Segment, learned: list) -> bool:
+    """Whether an interaction role's own segment ``s`` would replace one of the ``learned``
+    actions' segments (cover at least half of its tokens, as :func:`splice` replaces). It
+    may not: a role matched on the tokens alone (Slap's ``(T_N_Z)+ T_Z`` is the start of many
+    a hook) does not outweigh the gesture the user taught, whose shape decided it."""
+    return any(2 * (min(o.stop, s.stop) - max(o.first, s.first)) >= (o.stop - o.first) for o in learned)
 
 
 def splice(segments: dict[str, list[Segment]], pools: dict[str, list[Segment]], found: list[Found]):
@@ -265,6 +280,8 @@ class LiveContexter:
         auto = compiled.roles.automaton(threshold) if compiled.roles is not None else None
         self.role_matchers = {n: Matcher(auto, n) for n in names} if auto is not None else {}
         self.role_frontier = {n: -np.inf for n in names} if auto is not None else {}
+        self._learned_names = learned_names(compiled)
+        self._learned = {n: [] for n in names}  # learned actions' segments: no role segment may replace them
         self._reported = set()
         self._roles = {a for rule in self.contexter.rules for a in rule.actions}  # what may join one
         self._selected: list = []  # the Contexter's selection, (Found, segments), as of the last new segment
@@ -295,6 +312,9 @@ class LiveContexter:
             if s.action in self._roles:  # only a role's action may join an interaction
                 self.pools[track].append(s)
                 self._stale = True
+            elif s.action in self._learned_names and frontier is self.frontier:
+                self._learned[track].append(s)
+                self._stale = True
         return self._check() if check and self.contexter.rules else []
 
     def _check(self, final: bool = False) -> list:
@@ -304,8 +324,10 @@ class LiveContexter:
         that shared none of its segments are taken or not as before."""
         decided = min(min(self.frontier.values()), min(self.role_frontier.values(), default=np.inf))
         if self._stale:
-            self._selected = [(f, [self.pools[tr][x] for tr, x in zip(f.tracks, f.indices)])
-                              for f in self.contexter.select(self.doodle, self.pools)]
+            pools = {n: [s for s in pool if not overrides(s, self._learned[n])]  # (the track's own segments tile
+                     for n, pool in self.pools.items()}                           # it: only role segments can)
+            self._selected = [(f, [pools[tr][x] for tr, x in zip(f.tracks, f.indices)])
+                              for f in self.contexter.select(self.doodle, pools)]
             self._stale = False
         out = []
         for f, segs in self._selected:
@@ -317,6 +339,7 @@ class LiveContexter:
             for name, pool in self.pools.items():
                 track = self.doodle.track(name)
                 self.pools[name] = [s for s in pool if _time(track, s.end - 1) >= decided]
+                self._learned[name] = [s for s in self._learned[name] if _time(track, s.end - 1) >= decided]
         return out
 
 

@@ -372,6 +372,31 @@ def test_a_two_handed_gesture_one_hand_of_which_reads_as_a_built_in_action(tmp_p
     assert sorted((r.track, r.action, r.start) for r in replay(take, compiled).found) == expected
 
 
+def test_an_interaction_role_matched_on_tokens_does_not_replace_a_learned_gesture(tmp_path):
+    """Sub_U005's gestures learned with both hands (ex_0, ex_2, ex_3), the built-in actions
+    beside them: the held-out hook_right (ex_1) starts with the tokens of the built-in Slap
+    role (``(T_N_Z)+ T_Z``) while the left hand is still (Slapped, ``T_STILL+``). The
+    interaction took the hook's place; the shape-decided gesture the user taught stays —
+    in the batch and live."""
+    from bench.learning_protocol import load as load_vive, make_library
+    from doodle.app.replay import replay
+    from grammar.recognizer import load_actions, recognize
+
+    if not VIVE.is_dir():
+        pytest.skip("real Vive recordings not found")
+    user = load_vive(VIVE)["Sub_U005"]
+    lib = make_library(tmp_path / "mine", {g: [user[g][i] for i in (0, 2, 3)] for g in sorted(user)}, ("c0", "c1"))
+    compiled = load_actions(lib, True)
+    take = user["hook_right"][1]
+    batch = recognize(take, compiled)
+    for track in ("c0", "c1"):
+        assert [getattr(s, "interaction", s.action) for s in batch[track][1]
+                if s.action not in ("unknown", "Idle")] == ["hook_right"]
+    expected = sorted((name, s.action, float(take.track(name).t[s.start]))
+                      for name, (_, segs) in batch.items() for s in segs if s.action != "unknown")
+    assert sorted((r.track, r.action, r.start) for r in replay(take, compiled).found) == expected
+
+
 def test_two_performers_of_built_in_actions_beside_a_two_handed_library(tmp_path):
     """Two characters each performing built-in actions (generated performers, one per
     track), Sub_U007's gestures learned with both hands beside them: a two-handed action
