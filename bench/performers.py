@@ -187,15 +187,21 @@ def _beside_two(job) -> tuple[str, list, list, int]:
     return user, beside, without, taken
 
 
+def two_performer_scenes() -> list[tuple]:
+    """``(first actions, second actions, style, seed)``: per style, two scenes of two
+    performers each playing three random built-in actions, Idle before and after."""
+    rng = np.random.default_rng(11)
+    return [(("Idle", *rng.choice(ACTIONS, 3), "Idle"), ("Idle", *rng.choice(ACTIONS, 3), "Idle"), style,
+             900 + 10 * k + j) for k, style in enumerate(style_grid()) for j in range(2)]
+
+
 def beside_two_handed(users) -> None:
     """Two characters, one per track, each performing three random built-in actions
     (Idle between, two takes per style), read with each Vive user's gestures learned with
     both hands (``--tracks c0,c1``) beside the built-in actions, against the built-in
     actions alone: a two-handed action must not take one character's action because the
     other moved at the same time."""
-    rng = np.random.default_rng(11)
-    scenes = [(("Idle", *rng.choice(ACTIONS, 3), "Idle"), ("Idle", *rng.choice(ACTIONS, 3), "Idle"), style,
-               900 + 10 * k + j) for k, style in enumerate(style_grid()) for j in range(2)]
+    scenes = two_performer_scenes()
     with ProcessPoolExecutor(max_workers=2) as pool:
         rows = list(pool.map(_beside_two, [(u, scenes) for u in users]))
     print(f"  two performers beside a two-handed library ({len(scenes)} scenes × 2 tracks of 3 built-in actions; "

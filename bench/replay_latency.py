@@ -12,7 +12,11 @@ what each frame costs.
   Vive recordings when ``../shared/data`` is there: per user, a library learned from ex_0..2
   of every gesture (``doodle learn``'s function, c0), and the held-out ex_3, ex_4 of every
   gesture streamed one after another with an idle stretch between them (the live case) —
-  read with that library alone and with the built-in actions beside it.
+  read with that library alone and with the built-in actions beside it; and two
+  performers of built-in actions, one per track (``bench.performers``' two-performer
+  scenes), beside two users' gestures learned with both hands — where a built-in segment
+  waits for what the other hand's Matcher reads, and the other hand's for the two-handed
+  actions' track.
   Where a gesture ends: :func:`doodle.app.replay.latencies`.
 * Recording at pace: ``doodle record``'s loop (:func:`doodle.app.recorder.record`) fed by a
   source that, like SteamVR, gives only the pose of the moment — a real user's held-out
@@ -107,7 +111,30 @@ def _real() -> None:
     report(f"real recordings, {len(users)} users' held-out gestures streamed, each user's learned library (c0)",
            lines[False])
     report("the same, with the built-in actions beside the learned ones (`--library DIR`, the default)", lines[True])
+    _two_performers(data)
     _recording_pace(data)
+
+
+def _two_performers(data, users=("Sub_U001", "Sub_U007")) -> None:
+    """Two characters each playing built-in actions (one per track, generated performers:
+    ``bench.performers``' two-performer scenes, every other one) read live beside a user's
+    gestures learned with both hands: a built-in segment waits for what the other hand's
+    Matcher reads, and the other hand's segments for the two-handed actions' track."""
+    from bench.learning_protocol import make_library
+    from bench.performers import two_performer_scenes
+    from doodle.synth.performers import perform_two
+
+    lines = []
+    with tempfile.TemporaryDirectory() as tmp:
+        for user in users:
+            classes = sorted(data[user])
+            compiled = load_actions(make_library(Path(tmp) / user, {g: data[user][g][:3] for g in classes},
+                                                 ("c0", "c1")), True)
+            for first, second, style, seed in two_performer_scenes()[::2]:
+                doodle = perform_two(first, second, style, seed)
+                lines.append(latencies(doodle, replay(doodle, compiled)))
+    report(f"two performers of built-in actions, beside {' and '.join(u.replace('Sub_', '') for u in users)}'s "
+           "gestures learned with both hands (c0+c1)", lines)
 
 
 PACE_SECONDS = 15.0
