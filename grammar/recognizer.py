@@ -418,6 +418,7 @@ class Live:
         self._decided = {n: -1 for n in self.names}  # sample up to which a track's segments were heard
         self._holding = {n: [] for n in self.names}  # a partner track's final segments, until its owners decide
         self._covered = {n: [] for n in self.names}  # samples of two-handed actions heard, laid over a partner
+        self._settled_at = {n: (None, False) for n in self.names}  # what _settled last read, and whether at rest
         self._state = {n: frozenset(compiled.library.states if compiled is not None else ()) for n in self.names}
         self._shown = {n: [] for n in self.names}  # the provisional segments last reported, per track
         self._turn = 0  # the track whose provisional actions are worked out first at the next frame
@@ -563,6 +564,34 @@ class Live:
             return out
         return out + self._hear(name, segments)
 
+    def _settled(self, name: str) -> float:
+        """The sample before which no action still to come on track ``name`` can lie: the
+        end of what it has decided — or, when all it has not decided yet is a pause that
+        may be a pause by now (:meth:`Segmenter.held`), the samples classified so far: an
+        action starts with a movement (so a character at rest holds back no other's)."""
+        chain, decided = self.chains[name], self._decided[name]
+        if chain.finished or chain.tokens_only:
+            return decided
+        key = (id(chain), len(chain.tokens), decided, chain.segmenter.held_key())
+        if self._settled_at[name][0] != key:  # what held() reads has changed
+            self._settled_at[name] = (key, self._at_rest(chain, decided))
+        if not self._settled_at[name][1]:
+            return decided
+        return max(decided, chain.segmenter.pending.end + chain.offset)  # the pause goes on
+
+    @staticmethod
+    def _at_rest(chain: _Chain, decided: float) -> bool:
+        """Whether all of a track not decided yet is a pause that may be a pause by now."""
+        for k in reversed(chain.tokens):
+            if k.end + chain.offset <= decided:
+                break
+            if k.name != "T_STILL":
+                return False
+        held = chain.segmenter.held()
+        pending = chain.segmenter.pending
+        return bool(held) and pending is not None and all(k.name == "T_STILL" for k in held) \
+            and held[-1].end >= pending.end
+
     def _known(self, name: str) -> list[Token]:
         """A track's tokens so far (sample indices of the stream)."""
         chain = self.chains[name]
@@ -576,7 +605,9 @@ class Live:
         out = []
         for name, owners in self._owners.items():
             held = self._holding[name]
-            upto = math.inf if final else min(self._decided[o] for o in owners)
+            if not held:
+                continue
+            upto = math.inf if final else min(self._settled(o) for o in owners)
             n = 0
             while n < len(held) and held[n].end <= upto:
                 n += 1

@@ -112,6 +112,7 @@ class Refiner:
         self.partners = dict(partners or {})
         self.shift = 0  # samples of the stream before this track's first (the partners' indices count from it)
         self.waiting_for_partners = False  # whether the next segment waits for the other tracks' Matchers
+        self._over: dict = {}  # _two_handed_over's answers
         self._allowed = shapes.allowed(track, set(self.others) | {track})
         pairs = shapes.partners or ((),) * len(shapes.names)
         self._paired = {o for k, others in enumerate(pairs) if self._allowed[k] for o in others}  # tracks read too
@@ -124,7 +125,7 @@ class Refiner:
         """An independent copy (what it is pushed leaves this one as it is)."""
         other = copy.copy(self)
         other.tokens, other._waiting, other.others = list(self.tokens), list(self._waiting), dict(self.others)
-        other.partners = dict(self.partners)
+        other.partners, other._over = dict(self.partners), dict(self._over)  # (a fork reads tokens not final)
         return other
 
     def push(self, segments: list) -> list:
@@ -150,7 +151,8 @@ class Refiner:
             motion = self._motion(first, len(self.tokens), False)
             if motion == "pending":
                 return False
-            if motion is not None and not self._partners_reach(self.tokens[motion[1] - 1].end):
+            if motion is not None and not self._partners_reach(self.tokens[motion[1] - 1].end) \
+                    and self._two_handed_over(first, motion):
                 self.waiting_for_partners = True  # what the other hands' Matchers read there decides
                 return False
             return self._pieces(first, self._waiting[1:], len(self.tokens), False) is not None
@@ -276,6 +278,21 @@ class Refiner:
                 return self._among_pieces(seg, first, known)
         two = self._two(motion, known)  # or two learned gestures back to back, as a shaped segment's motion may be
         return list(two) if two is not None else [whole]
+
+    def _two_handed_over(self, seg, motion) -> bool:
+        """Whether what the other hands' Matchers read decides a built-in segment (of
+        :meth:`_over_builtin`): it is read whole as its motion, and a two-handed action fits
+        that motion whole at more edits."""
+        key = (seg.first, seg.stop, max(seg.first, self._done), tuple(motion))
+        if key not in self._over:
+            self._over[key] = False
+            a, b = motion
+            moving = [i for i in range(key[2], seg.stop) if self.tokens[i].name != "T_STILL"]
+            if moving and (moving[0], moving[-1] + 1) == (a, b) and b - a >= SPOT_TOKENS and seg.distance is not None:
+                whole = self._best([a], [(b, b)], len(self.tokens), motion=motion, across=False)
+                self._over[key] = bool(whole is not None and whole[3] > seg.distance and self.shapes.partners
+                                       and self.shapes.partners[whole[2]])
+        return self._over[key]
 
     def _partners_reach(self, sample: int) -> bool:
         """Whether the other tracks' Matchers are final up to ``sample`` (those two-handed

@@ -397,6 +397,33 @@ def test_an_interaction_role_matched_on_tokens_does_not_replace_a_learned_gestur
     assert sorted((r.track, r.action, r.start) for r in replay(take, compiled).found) == expected
 
 
+def test_a_character_at_rest_holds_back_no_other_characters_actions(tmp_path):
+    """Live, beside a two-handed library (Sub_U001's gestures on c0+c1): a track the
+    two-handed actions also read has its final actions heard once the first track has
+    decided past them — but a first track at rest, whose pause goes on, decides nothing
+    until it moves again. No two-handed action can start in a pause: the other character's
+    actions are final as they end, not when the stream does (they were held to its end)."""
+    from bench.learning_protocol import load as load_vive, make_library
+    from doodle.app.replay import replay
+    from doodle.core.model import Doodle, Track
+    from doodle.synth.performers import perform, style_grid
+    from grammar.recognizer import load_actions
+
+    if not VIVE.is_dir():
+        pytest.skip("real Vive recordings not found")
+    user = load_vive(VIVE)["Sub_U001"]
+    lib = make_library(tmp_path / "mine", {g: user[g][:3] for g in sorted(user)}, ("c0", "c1"))
+    acting, _ = perform(("Idle", "Kick", "Idle", "Punch", "Idle", "Jump", "Idle"), style_grid()[0], 5, name="c1")
+    b = acting.tracks[0]
+    n = len(b.t)
+    noise = np.random.default_rng(0).normal(0.0, 0.0003, (n, 3))
+    resting = Track("c0", b.t, np.array([0.3, 1.0, 0.0]) + noise, np.tile([0.0, 0.0, 0.0, 1.0], (n, 1)), np.ones(n, bool))
+    found = replay(Doodle((resting, b), acting.rate), load_actions(lib, True)).found
+    heard = {f.action: f for f in found if f.track == "c1" and f.action != "Idle"}
+    assert list(heard) == ["Kick", "Punch", "Jump"]
+    assert heard["Kick"].at < heard["Jump"].start and heard["Punch"].at < b.t[-1] - 0.5
+
+
 def test_two_performers_of_built_in_actions_beside_a_two_handed_library(tmp_path):
     """Two characters each performing built-in actions (generated performers, one per
     track), Sub_U007's gestures learned with both hands beside them: a two-handed action
