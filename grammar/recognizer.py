@@ -614,15 +614,21 @@ class Live:
             if not n:
                 continue
             ready, self._holding[name] = held[:n], held[n:]
-            known = self._known(name)
-            starts = np.array([k.start for k in known], dtype=np.int64)
-            ends = np.array([k.end for k in known], dtype=np.int64)
-            spans = [(int(np.searchsorted(ends, a, side="right")), int(np.searchsorted(starts, b, side="left")))
-                     for a, b in self._covered[name]]
-            kept = [s for s in ready if s.action == "unknown"
-                    or all(2 * (min(s.stop, b) - max(s.first, a)) < s.stop - s.first for a, b in spans)]
+            covered = self._covered[name] = [(a, b) for a, b in self._covered[name] if b > ready[0].start]
+            kept = [s for s in ready if s.action == "unknown" or not any(
+                2 * self._within(name, s, a, b) >= s.stop - s.first for a, b in covered if a < s.end and s.start < b)]
             out += self._hear(name, kept)
         return out
+
+    def _within(self, name: str, s: Segment, a: int, b: int) -> int:
+        """How many of segment ``s``'s tokens (of track ``name``) lie over samples a..b."""
+        done, chain = self._done[name][0], self.chains[name]
+        count = 0
+        for i in range(s.first, s.stop):
+            k = done[i] if i < len(done) else chain.tokens[i - len(done)]
+            start, end = (k.start, k.end) if i < len(done) else (k.start + chain.offset, k.end + chain.offset)
+            count += end > a and start < b
+        return count
 
     def _hear(self, name: str, segments: list[Segment]) -> list[Heard]:
         """A track's final segments heard: interactions, behaviour states, two-handed actions."""

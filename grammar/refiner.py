@@ -100,8 +100,8 @@ class Refiner:
     ``partners`` what the other tracks' Matchers made of them, ``{name: (spans, known)}``:
     the samples of their movement read as no action (:func:`unread`, in order) and the sample
     up to which that is final — counted from :attr:`shift` samples before this track's first.
-    A built-in segment waits until they are final as far as its motion goes, when two-handed
-    learned actions are read on this track.
+    A built-in segment read whole as its motion, which a two-handed learned action fits at
+    more edits, waits until they are final as far as that motion goes.
     """
 
     def __init__(self, shapes: ShapeSet, p: np.ndarray, valid: np.ndarray, track: str | None = None,
