@@ -658,11 +658,13 @@ class Live:
         their end (at the end of the stream, as far as they go)."""
         out, waiting = [], []
         for s, role, other in self._laying:
-            known = self._known(other)
-            if not final and (not known or known[-1].end < s.end):
+            chain, done = self.chains[other], self._done[other][0]
+            last = (chain.tokens[-1].end + chain.offset if chain.tokens and not chain.finished
+                    else done[-1].end if done else None)  # where the other track's tokens reach
+            if not final and (last is None or last < s.end):
                 waiting.append((s, role, other))
                 continue
-            out += [Heard(other, o) for o in overlay([], known, s, role) if isinstance(o, InteractionSegment)]
+            out += [Heard(other, o) for o in overlay([], self._known(other), s, role) if isinstance(o, InteractionSegment)]
         self._laying = waiting
         return out
 
