@@ -342,19 +342,24 @@ class Refiner:
         return (range(a, first + 1), ends) if closed or b <= seg.stop else None
 
     def _among_pieces(self, seg, first: int, known: int) -> list:
-        """A learned action read over a built-in segment and the pieces beside it (a list of
-        one ``(first, stop, action, edits)``, or none):
+        """Learned actions read over a built-in segment and the pieces beside it (a list of
+        one or two ``(first, stop, action, edits)``, or none):
         the best window (:meth:`_best`) of :meth:`_pieces` — one that holds the segment
         whole and cuts no other built-in one — other than the segment alone. Where gestures
         follow each other without a pause no motion bounds one, and the Matcher reads a
         learned gesture's tokens as pieces as readily (built-in segments with unknown tokens
         between, each run too short to search; a hook as Cast Fireball with a few unknown
         tokens after it; an uppercut's start as Walk Back, its rest as the uppercut); a
-        window that holds more than the one segment is read as the learned action it fits;
-        the segment alone stays the built-in action."""
+        window that holds more than the one segment is read as the learned action it fits —
+        or as two learned gestures back to back, when two fit its two parts (from as far
+        back as a window may start) better than one fits it whole (:meth:`_two`); the
+        segment alone stays the built-in action."""
         starts, ends = self._pieces(seg, self._waiting, known, True)
         best = self._best(starts, ends, known, across=False, without=(first, seg.stop))
-        return [best] if best is not None else []
+        if best is None:
+            return []
+        two = self._two((min(best[0], starts[0]), best[1]), known)  # or two learned gestures back to back
+        return list(two) if two is not None else [best]
 
     def _emit_found(self, found: list, stop: int) -> list:
         """Learned actions found in order ``[(first, stop, action, edits), …]`` emitted, the

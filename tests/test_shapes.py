@@ -347,6 +347,32 @@ def test_a_motion_read_whole_as_a_built_in_action_is_the_learned_one_that_reads_
     assert named == ["uppercut_right"]
 
 
+def test_two_learned_gestures_among_built_in_pieces(tmp_path):
+    """Sub_U004's fly_eagle, left_right_left_combo, hook_left, right_left_right_combo and
+    cartwheel_left back to back with both hands, the built-in actions beside the learned
+    ones: the Matcher reads the hook and the start of the combo after it as built-in
+    pieces, and the window over those pieces that fits best — the combo's — swallowed the
+    hook. The hook and the combo fit the window's two parts better than the combo fits it
+    whole: both are read (:meth:`Refiner._two`, as over a shaped segment's motion)."""
+    from bench.learning_protocol import load as load_vive, make_library, stream
+    from grammar.recognizer import load_actions, recognize
+
+    if not VIVE.is_dir():
+        pytest.skip("real Vive recordings not found")
+    user = load_vive(VIVE)["Sub_U004"]
+    lib = make_library(tmp_path / "mine", {g: user[g][:3] for g in sorted(user)}, ("c0", "c1"))
+
+    class InOrder:
+        def permutation(self, n):
+            return np.arange(n)
+
+    takes = (("fly_eagle", 3), ("left_right_left_combo", 3), ("hook_left", 4), ("right_left_right_combo", 3),
+             ("cartwheel_left", 3))
+    doodle, _ = stream([(g, user[g][k]) for g, k in takes], InOrder(), False)
+    named = [s.action for s in recognize(doodle, load_actions(lib, True))["c0"][1] if s.action not in ("unknown", "Idle")]
+    assert named == [g for g, _ in takes]
+
+
 def test_a_two_handed_gesture_one_hand_of_which_reads_as_a_built_in_action(tmp_path):
     """Sub_U001's gestures learned with both hands (ex_0, ex_1, ex_4), the built-in actions
     beside them: the right hand of the held-out hook_left (ex_2) reads whole as Crescent
