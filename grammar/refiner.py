@@ -323,7 +323,9 @@ class Refiner:
         first pause after the segment and of :data:`SPOT_MAX` tokens from its start — or,
         where the next learned segment begins within that, about where that one ends
         (within :data:`TRIM` before to :data:`REACH` after: the Matcher may read a learned
-        gesture's start as a built-in piece)."""
+        gesture's start as a built-in piece), or within :data:`TRIM` tokens of where it
+        begins (its own windows may give those up: the Matcher may read the end of the
+        gesture before as the learned one's start)."""
         from grammar.matcher import UNKNOWN
 
         first = max(seg.first, self._done)
@@ -337,7 +339,8 @@ class Refiner:
             if w.action in self.shapes.names:
                 if known < w.stop + REACH and not closed:
                     return None
-                return range(a, first + 1), ends + [(w.stop - TRIM, w.stop + REACH)]
+                return range(a, first + 1), ends + [(w.first, min(w.first + TRIM, w.stop)),
+                                                    (w.stop - TRIM, w.stop + REACH)]
             ends.append((w.first, min(w.stop, b)) if w.action == UNKNOWN else (w.stop, w.stop))
         return (range(a, first + 1), ends) if closed or b <= seg.stop else None
 

@@ -373,6 +373,28 @@ def test_two_learned_gestures_among_built_in_pieces(tmp_path):
     assert named == [g for g, _ in takes]
 
 
+def test_a_gesture_read_as_a_built_in_piece_before_a_learned_segment(tmp_path):
+    """Sub_U001's held-out takes back to back (the bench's first stream order), the built-in
+    actions beside the learned ones: the Matcher reads the middle of a hook_right as
+    Despair, one token, and the hook's end as the start of the fly_eagle after it. The
+    windows around Despair may end where a learned segment's own windows may begin
+    (within TRIM tokens of its start): the hook is read, and the fly_eagle after it."""
+    from bench.learning_protocol import load as load_vive, make_library, stream
+    from grammar.recognizer import load_actions, recognize
+
+    if not VIVE.is_dir():
+        pytest.skip("real Vive recordings not found")
+    user = load_vive(VIVE)["Sub_U001"]
+    lib = make_library(tmp_path / "mine", {g: user[g][:3] for g in sorted(user)}, ("c0",))
+    pieces = [(g, d.select(["c0"])) for g in sorted(user) for d in user[g][3:5]]
+    doodle, spans = stream(pieces, np.random.default_rng(0), False)
+    found = recognize(doodle, load_actions(lib, True))["c0"][1]
+    t = doodle.t
+    for name, a, b in spans:
+        if name in ("hook_right", "fly_eagle") and 36.0 < a < 40.0:  # the hook at 36.8 s, the fly_eagle after it
+            assert any(s.action == name and t[s.start] < b and a < t[s.end - 1] for s in found), name
+
+
 def test_a_two_handed_gesture_one_hand_of_which_reads_as_a_built_in_action(tmp_path):
     """Sub_U001's gestures learned with both hands (ex_0, ex_1, ex_4), the built-in actions
     beside them: the right hand of the held-out hook_left (ex_2) reads whole as Crescent
