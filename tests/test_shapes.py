@@ -395,54 +395,35 @@ def test_a_gesture_read_as_a_built_in_piece_before_a_learned_segment(tmp_path):
             assert any(s.action == name and t[s.start] < b and a < t[s.end - 1] for s in found), name
 
 
-def test_a_two_handed_gesture_one_hand_of_which_reads_as_a_built_in_action(tmp_path):
-    """Sub_U001's gestures learned with both hands (ex_0, ex_1, ex_4), the built-in actions
-    beside them: the right hand of the held-out hook_left (ex_2) reads whole as Crescent
-    Kick at two edits, the hook's own expression at three — but the hook's shape fits both
-    hands, and the left hand's Matcher read its movement there as no action. The two-handed
-    action explains both hands: it is the hook, on both tracks, live as in the batch."""
+@pytest.mark.parametrize("user,trained,gesture,take", [("Sub_U001", (0, 1, 4), "hook_left", 2),
+                                                      ("Sub_U005", (0, 2, 3), "hook_right", 1)])
+def test_a_two_handed_gesture_is_not_taken_by_built_in_readings_of_one_hand(tmp_path, user, trained, gesture, take):
+    """Gestures learned with both hands, the built-in actions beside them; a held-out take
+    read, batch and live, as its two-handed action on both tracks. Sub_U001's hook_left:
+    the right hand reads whole as Crescent Kick at two edits, the hook's own expression at
+    three — but the hook's shape fits both hands, and the left hand's Matcher read its
+    movement there as no action: the two-handed action explains both hands. Sub_U005's
+    hook_right starts with the tokens of the built-in Slap role (``(T_N_Z)+ T_Z``) while
+    the left hand is still (Slapped, ``T_STILL+``): a role matched on the tokens alone does
+    not take the place of the shape-decided gesture the user taught."""
     from bench.learning_protocol import load as load_vive, make_library
     from doodle.app.replay import replay
     from grammar.recognizer import load_actions, recognize
 
     if not VIVE.is_dir():
         pytest.skip("real Vive recordings not found")
-    user = load_vive(VIVE)["Sub_U001"]
-    lib = make_library(tmp_path / "mine", {g: [user[g][i] for i in (0, 1, 4)] for g in sorted(user)}, ("c0", "c1"))
+    examples = load_vive(VIVE)[user]
+    lib = make_library(tmp_path / "mine", {g: [examples[g][i] for i in trained] for g in sorted(examples)},
+                       ("c0", "c1"))
     compiled = load_actions(lib, True)
-    take = user["hook_left"][2]
-    batch = recognize(take, compiled)
+    doodle = examples[gesture][take]
+    batch = recognize(doodle, compiled)
     for track in ("c0", "c1"):
         assert [getattr(s, "interaction", s.action) for s in batch[track][1]
-                if s.action not in ("unknown", "Idle")] == ["hook_left"]
-    expected = sorted((name, s.action, float(take.track(name).t[s.start]))
+                if s.action not in ("unknown", "Idle")] == [gesture]
+    expected = sorted((name, s.action, float(doodle.track(name).t[s.start]))
                       for name, (_, segs) in batch.items() for s in segs if s.action != "unknown")
-    assert sorted((r.track, r.action, r.start) for r in replay(take, compiled).found) == expected
-
-
-def test_an_interaction_role_matched_on_tokens_does_not_replace_a_learned_gesture(tmp_path):
-    """Sub_U005's gestures learned with both hands (ex_0, ex_2, ex_3), the built-in actions
-    beside them: the held-out hook_right (ex_1) starts with the tokens of the built-in Slap
-    role (``(T_N_Z)+ T_Z``) while the left hand is still (Slapped, ``T_STILL+``). The
-    interaction took the hook's place; the shape-decided gesture the user taught stays —
-    in the batch and live."""
-    from bench.learning_protocol import load as load_vive, make_library
-    from doodle.app.replay import replay
-    from grammar.recognizer import load_actions, recognize
-
-    if not VIVE.is_dir():
-        pytest.skip("real Vive recordings not found")
-    user = load_vive(VIVE)["Sub_U005"]
-    lib = make_library(tmp_path / "mine", {g: [user[g][i] for i in (0, 2, 3)] for g in sorted(user)}, ("c0", "c1"))
-    compiled = load_actions(lib, True)
-    take = user["hook_right"][1]
-    batch = recognize(take, compiled)
-    for track in ("c0", "c1"):
-        assert [getattr(s, "interaction", s.action) for s in batch[track][1]
-                if s.action not in ("unknown", "Idle")] == ["hook_right"]
-    expected = sorted((name, s.action, float(take.track(name).t[s.start]))
-                      for name, (_, segs) in batch.items() for s in segs if s.action != "unknown")
-    assert sorted((r.track, r.action, r.start) for r in replay(take, compiled).found) == expected
+    assert sorted((r.track, r.action, r.start) for r in replay(doodle, compiled).found) == expected
 
 
 def test_a_character_at_rest_holds_back_no_other_characters_actions(tmp_path):
