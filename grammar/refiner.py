@@ -55,9 +55,10 @@ class Refiner:
     Segments are taken in order. One whose action has shapes is re-decided once the next
     segment and the :data:`REACH` tokens after it are known: every window of whole tokens
     from up to :data:`REACH` tokens before to :data:`TRIM` after its first token, and
-    likewise around its last — or, when the next segment has shapes too, around the next
-    one's last (the Matcher, with a learned action's large tolerance, may cut one long
-    gesture in two) — no window starting or ending on a pause or reaching back into what
+    likewise around its last — or, when the next segment has shapes too (directly or after
+    a few unknown tokens, :meth:`_second_half`), around the next one's last (the Matcher,
+    with a learned action's large tolerance, may cut one long gesture in two) — no window
+    starting or ending on a pause or reaching back into what
     is already decided, is scored for every shaped action as ``edits + WEIGHT × shape distance``.
     Each window is the action it scores best for, when its shape distance is within that
     action's :attr:`ShapeSet.reject` (else it is none). The segment's *motion* — its tokens
@@ -156,10 +157,8 @@ class Refiner:
                 self.waiting_for_partners = True  # what the other hands' Matchers read there decides
                 return False
             return self._pieces(first, self._waiting[1:], len(self.tokens), False) is not None
-        if len(self._waiting) < 2:  # the next segment decides how far a window may reach
-            return False
-        after = self._waiting[1]
-        if len(self.tokens) < (after.stop if after.action in self.shapes.names else first.stop) + REACH:
+        half = self._second_half(self._waiting[1:])  # the next segments decide how far a window may reach
+        if half == "pending" or len(self.tokens) < (first if half is None else half).stop + REACH:
             return False
         return self._motion(first, len(self.tokens), False) != "pending"  # where its motion ends is known
 
@@ -187,9 +186,10 @@ class Refiner:
             found = self._spots(first, seg.stop, known)
         elif seg.action in self.shapes.names:
             ends = [(seg.stop - TRIM, seg.stop + REACH)]
-            if after is not None and after.action in self.shapes.names:  # one gesture the Matcher cut in two
-                ends.append((after.stop - TRIM, after.stop + REACH))
-            elif after is not None and after.action == UNKNOWN:
+            half = self._second_half(self._waiting)
+            if half not in (None, "pending"):  # one gesture the Matcher cut in two
+                ends.append((half.stop - TRIM, half.stop + REACH))
+            if after is not None and after.action == UNKNOWN:
                 ends.append((seg.stop, min(after.stop, seg.stop + UNKNOWN_REACH)))
             lowest = max(self._open_start(first), seg.first - UNKNOWN_REACH)  # into a pending unknown run, if any
             starts = list(range(lowest, min(seg.stop, seg.first + TRIM + 1)))
@@ -224,6 +224,27 @@ class Refiner:
             self._take_back(f)
         self._emit(UNKNOWN, first, f, False, None)  # what it gives up joins the pending run (emits nothing)
         return self._spot_pending(min(f, first), known) + self._emit_found(found, seg.stop)
+
+    def _second_half(self, rest: list):
+        """The learned segment among ``rest`` (the segments after a learned one, in order)
+        that may hold the rest of the same gesture — the Matcher, with a learned action's
+        large tolerance, may cut one long gesture in two, leaving a few tokens between the
+        halves unknown: the next segment, when it has shapes, or the one after an unknown run
+        of fewer than :data:`SPOT_TOKENS` tokens and no pause, when that one has. None when
+        there is none; "pending" while the Matcher's segments do not reach that far yet."""
+        from grammar.matcher import UNKNOWN
+
+        if not rest:
+            return "pending"
+        nxt = rest[0]
+        if nxt.action in self.shapes.names:
+            return nxt
+        if nxt.action != UNKNOWN or nxt.stop - nxt.first >= SPOT_TOKENS or any(
+                self.tokens[i].name == "T_STILL" for i in range(nxt.first, min(nxt.stop, len(self.tokens)))):
+            return None
+        if len(rest) < 2:
+            return "pending"
+        return rest[1] if rest[1].action in self.shapes.names else None
 
     def _moving(self, seg) -> bool:
         """Whether a segment of a built-in action (one without shapes; not unknown) holds
@@ -323,7 +344,8 @@ class Refiner:
         first pause after the segment and of :data:`SPOT_MAX` tokens from its start — or,
         where the next learned segment begins within that, about where that one ends
         (within :data:`TRIM` before to :data:`REACH` after: the Matcher may read a learned
-        gesture's start as a built-in piece), or within :data:`TRIM` tokens of where it
+        gesture's start as a built-in piece) or where the rest of it ends, if the Matcher cut
+        it in two (:meth:`_second_half`), or within :data:`TRIM` tokens of where it
         begins (its own windows may give those up: the Matcher may read the end of the
         gesture before as the learned one's start)."""
         from grammar.matcher import UNKNOWN
@@ -333,14 +355,17 @@ class Refiner:
         b = min(known, a + SPOT_MAX)
         b = next((i for i in range(seg.stop, b) if self.tokens[i].name == "T_STILL"), b)
         ends = [(seg.stop, seg.stop)]
-        for w in after:
+        for i, w in enumerate(after):
             if w.first >= b or (w.action not in self.shapes.names and w.action != UNKNOWN and w.stop > b):
                 return range(a, first + 1), ends
             if w.action in self.shapes.names:
-                if known < w.stop + REACH and not closed:
+                half = self._second_half(after[i + 1:])
+                if not closed and (half == "pending" or known < (w if half is None else half).stop + REACH):
                     return None
-                return range(a, first + 1), ends + [(w.first, min(w.first + TRIM, w.stop)),
-                                                    (w.stop - TRIM, w.stop + REACH)]
+                ends += [(w.first, min(w.first + TRIM, w.stop)), (w.stop - TRIM, w.stop + REACH)]
+                if half not in (None, "pending"):
+                    ends.append((half.stop - TRIM, half.stop + REACH))
+                return range(a, first + 1), ends
             ends.append((w.first, min(w.stop, b)) if w.action == UNKNOWN else (w.stop, w.stop))
         return (range(a, first + 1), ends) if closed or b <= seg.stop else None
 

@@ -395,6 +395,34 @@ def test_a_gesture_read_as_a_built_in_piece_before_a_learned_segment(tmp_path):
             assert any(s.action == name and t[s.start] < b and a < t[s.end - 1] for s in found), name
 
 
+def test_a_gesture_the_matcher_cut_in_two_with_tokens_between(tmp_path):
+    """Sub_U007's held-out takes back to back, one controller, the built-in actions beside
+    the learned ones: the Matcher reads an uppercut_left (after a pause of the combo before
+    it) as Despair, hook_right, one unknown token and hook_right again. A window may end
+    where the second half ends — the Matcher may cut one gesture in two, with a few tokens
+    between the halves as well as none —: the uppercut is read whole, not as two hook_lefts;
+    live as in the batch."""
+    from bench.learning_protocol import load as load_vive, make_library, stream
+    from doodle.app.replay import replay
+    from grammar.recognizer import load_actions, recognize
+
+    if not VIVE.is_dir():
+        pytest.skip("real Vive recordings not found")
+
+    class InOrder:
+        def permutation(self, n):
+            return np.arange(n)
+
+    user = load_vive(VIVE)["Sub_U007"]
+    compiled = load_actions(make_library(tmp_path / "mine", {g: user[g][:3] for g in sorted(user)}, ("c0",)), True)
+    takes = (("golf_swing", 4), ("left_right_left_combo", 3), ("uppercut_left", 3), ("hook_right", 4), ("fly_eagle", 3))
+    doodle, _ = stream([(g, user[g][k].select(["c0"])) for g, k in takes], InOrder(), False)
+    found = [s for s in recognize(doodle, compiled)["c0"][1] if s.action not in ("unknown", "Idle")]
+    assert [s.action for s in found] == [g for g, _ in takes]
+    live = [(r.action, r.start) for r in replay(doodle, compiled).found if r.action not in ("unknown", "Idle")]
+    assert live == [(s.action, float(doodle.t[s.start])) for s in found]
+
+
 @pytest.mark.parametrize("user,trained,gesture,take", [("Sub_U001", (0, 1, 4), "hook_left", 2),
                                                       ("Sub_U005", (0, 2, 3), "hook_right", 1)])
 def test_a_two_handed_gesture_is_not_taken_by_built_in_readings_of_one_hand(tmp_path, user, trained, gesture, take):
