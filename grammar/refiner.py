@@ -28,6 +28,7 @@ TRIM = 3  # tokens it may give up at either end
 UNKNOWN_REACH = 8  # tokens it may take from a neighbouring unknown run
 SPOT_TOKENS, SPOT_MAX = 4, 40  # unknown runs of this many tokens are searched for a learned action…
 SPOT = 1.0  # …found when its shape distance is under this part of the action's rejection distance
+SEEN = 20000  # windows whose shape distances a Refiner keeps (beyond: the oldest half forgotten)
 TEMPO = 1.5  # a window is not an action when it lasts over this × its longest example or under its shortest / this
 
 
@@ -114,6 +115,7 @@ class Refiner:
         self.shift = 0  # samples of the stream before this track's first (the partners' indices count from it)
         self.waiting_for_partners = False  # whether the next segment waits for the other tracks' Matchers
         self._over: dict = {}  # _two_handed_over's answers
+        self._seen: dict = {}  # shape distances by the samples a window spans (shared with forks)
         self._allowed = shapes.allowed(track, set(self.others) | {track})
         pairs = shapes.partners or ((),) * len(shapes.names)
         self._paired = {o for k, others in enumerate(pairs) if self._allowed[k] for o in others}  # tracks read too
@@ -522,7 +524,7 @@ class Refiner:
                     edits.append(auto.accept_costs(d))
         if not windows:
             return None
-        ds = self.shapes.distances_of(windows, self._read)
+        ds = self._distances(windows)
         edits = np.array(edits)
         alone = np.where(self._fits(edits, ds, windows), edits + WEIGHT * ds, np.inf)
         score = alone.min(axis=1)
@@ -613,7 +615,7 @@ class Refiner:
                     edits.append(auto.accept_costs(d))
         if not windows:
             return None
-        ds = self.shapes.distances_of(windows, self._read)  # (windows, actions)
+        ds = self._distances(windows)  # (windows, actions)
         edits = np.array(edits)
         cost = ds
         if motion is not None:
@@ -632,6 +634,30 @@ class Refiner:
         if not np.isfinite(score[w, k]):
             return None
         return windows[w][0], windows[w][1], int(k), float(edits[w, k])
+
+    def _distances(self, windows: list) -> np.ndarray:
+        """(windows, actions): the shape distances of :meth:`ShapeSet.distances_of`, each
+        window's worked out once. A window's distances depend only on its samples, which
+        never change once recorded: they are kept by the samples it spans (shared with the
+        Refiner's forks, the live provisional readings) — unless a track it reads has not
+        reached its end yet."""
+        spans = [(self.tokens[f].start, self.tokens[e - 1].end) for f, e in windows]
+        new = [i for i, span in enumerate(spans) if span not in self._seen]
+        if new:
+            rows = self.shapes.distances_of([windows[i] for i in new], self._read)
+            reach = min((len(self.p) if name is None or name == self.track else
+                         len(self.others[name][0]) if self.others.get(name) is not None
+                         and self.others[name][0] is not None else 0)
+                        for g in self.shapes.groups for name in g.tracks)
+            for i, row in zip(new, rows):
+                if spans[i][1] <= reach:
+                    self._seen[spans[i]] = row
+            if len(self._seen) > SEEN:  # the oldest first (insertion order)
+                for span in list(self._seen)[:len(self._seen) - SEEN // 2]:
+                    del self._seen[span]
+            fresh = dict(zip(new, rows))
+            return np.array([fresh[i] if i in fresh else self._seen[span] for i, span in enumerate(spans)])
+        return np.array([self._seen[span] for span in spans])
 
     def _read(self, group: Group, window) -> tuple | None:
         """A window's samples of the group's tracks, resampled together (None: a track is missing)."""

@@ -116,3 +116,38 @@ def test_derived_rejection_separates_own_examples_from_straddles():
         group = ss.groups[0]  # the features as the library reads them (its chosen weight of the turn)
         own = np.array([shapes.features(paths[j], quats[j] if group.oriented else None, group.turn) for j in range(3)])
         assert ss.distances(own)[:, k].max() <= ss.reject[k] + 1e-9
+
+
+def test_shape_distances_kept_only_once_every_track_read_has_reached_them(library):
+    """The Refiner keeps a window's shape distances by the samples it spans (they never
+    change once recorded) — but not while a track a two-handed action reads has not
+    reached the window's end: live, the other hand's samples come a frame apart. Its
+    distances are then worked out again once they have, and equal a fresh Refiner's."""
+    from doodle.input.loader import load
+    from doodle.input.segmenter import tokenize_doodle
+    from grammar.recognizer import load_actions
+    from grammar.refiner import Refiner
+
+    lib, held = library
+    shapes = load_actions(lib, False).shapes
+    doodle = load(held["Clap"])
+    tokens = tokenize_doodle(doodle)["c0"]
+    c0, c1 = doodle.track("c0"), doodle.track("c1")
+    moving = [i for i, k in enumerate(tokens) if k.name != "T_STILL"]
+    window = (moving[0], moving[-1] + 1)
+    end = tokens[window[1] - 1].end
+
+    def refiner(c1_samples):
+        r = Refiner(shapes, c0.p, c0.valid, "c0", c0.q, {"c1": (c1.p[:c1_samples], c1.q[:c1_samples],
+                                                                  c1.valid[:c1_samples])}, c0.t)
+        r.tokens.extend(tokens)
+        return r
+
+    live = refiner(end - 1)  # the other hand one sample short of the window's end
+    early = live._distances([window])
+    assert not np.isfinite(early).any()  # the two-handed actions cannot be read yet
+    live.others["c1"] = (c1.p, c1.q, c1.valid)
+    fresh = refiner(len(c1.t))._distances([window])
+    assert np.isfinite(fresh).any()
+    assert np.array_equal(live._distances([window]), fresh)
+    assert np.array_equal(live._distances([window]), fresh)  # and now kept
