@@ -12,7 +12,9 @@ what each frame costs.
   Vive recordings when ``../shared/data`` is there: per user, a library learned from ex_0..2
   of every gesture (``doodle learn``'s function, c0), and the held-out ex_3, ex_4 of every
   gesture streamed one after another with an idle stretch between them (the live case) —
-  read with that library alone and with the built-in actions beside it; and two
+  read with that library alone and with the built-in actions beside it, and back to back
+  (no pause between gestures, where a gesture ends where the next begins) with the
+  built-in actions; and two
   performers of built-in actions, one per track (``bench.performers``' two-performer
   scenes), beside two users' gestures learned with both hands — where a built-in segment
   waits for what the other hand's Matcher reads, and the other hand's for the two-handed
@@ -100,17 +102,22 @@ def _real() -> None:
         return
     data = load_vive()
     users = sorted(data)
-    rng, lines = np.random.default_rng(0), {False: [], True: []}
+    rng, lines, joined, order = np.random.default_rng(0), {False: [], True: []}, [], np.random.default_rng(1)
     with tempfile.TemporaryDirectory() as tmp:
         for user in users:
             classes = sorted(data[user])
             folder = make_library(Path(tmp) / user, {g: data[user][g][:3] for g in classes}, ("c0",))
-            doodle, _ = stream([(g, d.select(["c0"])) for g in classes for d in data[user][g][3:5]], rng, idle=True)
+            pieces = [(g, d.select(["c0"])) for g in classes for d in data[user][g][3:5]]
+            doodle, _ = stream(pieces, rng, idle=True)
             for builtin, into in lines.items():
                 into.append(latencies(doodle, replay(doodle, load_actions(folder, builtin))))
+            doodle, _ = stream(pieces, order, idle=False)
+            joined.append(latencies(doodle, replay(doodle, load_actions(folder, True))))
     report(f"real recordings, {len(users)} users' held-out gestures streamed, each user's learned library (c0)",
            lines[False])
     report("the same, with the built-in actions beside the learned ones (`--library DIR`, the default)", lines[True])
+    report("the same gestures back to back, no pause between (a gesture ends where the next begins), with the "
+           "built-in actions: a learned segment waits for the pause that ends its motion, or 40 tokens", joined)
     _two_performers(data)
     _recording_pace(data)
 
