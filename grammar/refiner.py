@@ -643,21 +643,18 @@ class Refiner:
         reached its end yet."""
         spans = [(self.tokens[f].start, self.tokens[e - 1].end) for f, e in windows]
         new = [i for i, span in enumerate(spans) if span not in self._seen]
-        if new:
-            rows = self.shapes.distances_of([windows[i] for i in new], self._read)
+        rows = dict(zip(new, self.shapes.distances_of([windows[i] for i in new], self._read))) if new else {}
+        out = np.array([rows[i] if i in rows else self._seen[span] for i, span in enumerate(spans)])
+        if rows:  # kept — then the oldest forgotten, beyond SEEN (insertion order)
             reach = min((len(self.p) if name is None or name == self.track else
                          len(self.others[name][0]) if self.others.get(name) is not None
                          and self.others[name][0] is not None else 0)
                         for g in self.shapes.groups for name in g.tracks)
-            for i, row in zip(new, rows):
-                if spans[i][1] <= reach:
-                    self._seen[spans[i]] = row
-            if len(self._seen) > SEEN:  # the oldest first (insertion order)
+            self._seen.update((spans[i], row) for i, row in rows.items() if spans[i][1] <= reach)
+            if len(self._seen) > SEEN:
                 for span in list(self._seen)[:len(self._seen) - SEEN // 2]:
                     del self._seen[span]
-            fresh = dict(zip(new, rows))
-            return np.array([fresh[i] if i in fresh else self._seen[span] for i, span in enumerate(spans)])
-        return np.array([self._seen[span] for span in spans])
+        return out
 
     def _read(self, group: Group, window) -> tuple | None:
         """A window's samples of the group's tracks, resampled together (None: a track is missing)."""

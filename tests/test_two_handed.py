@@ -151,3 +151,33 @@ def test_shape_distances_kept_only_once_every_track_read_has_reached_them(librar
     assert np.isfinite(fresh).any()
     assert np.array_equal(live._distances([window]), fresh)
     assert np.array_equal(live._distances([window]), fresh)  # and now kept
+
+
+def test_shape_distances_forgotten_beyond_the_limit_are_worked_out_again(library, monkeypatch):
+    """The Refiner keeps at most SEEN windows' distances: forgetting the oldest, even one
+    the same call read as kept, changes no answer."""
+    from doodle.input.loader import load
+    from doodle.input.segmenter import tokenize_doodle
+    from grammar import refiner as refiner_module
+    from grammar.recognizer import load_actions
+    from grammar.refiner import Refiner
+
+    lib, held = library
+    shapes = load_actions(lib, False).shapes
+    doodle = load(held["Lift"])
+    tokens = tokenize_doodle(doodle)["c0"]
+    c0, c1 = doodle.track("c0"), doodle.track("c1")
+
+    def refiner():
+        r = Refiner(shapes, c0.p, c0.valid, "c0", c0.q, {"c1": (c1.p, c1.q, c1.valid)}, c0.t)
+        r.tokens.extend(tokens)
+        return r
+
+    windows = [(f, e) for f in range(len(tokens)) for e in range(f + 1, len(tokens) + 1)]
+    assert len(windows) >= 4
+    monkeypatch.setattr(refiner_module, "SEEN", 2)
+    small = refiner()
+    small._distances(windows[:2])
+    for chosen in (windows[:1] + windows[2:4], windows[1:4], windows):
+        assert np.array_equal(small._distances(chosen), refiner()._distances(chosen), equal_nan=True)
+        assert len(small._seen) <= 2 * len(chosen)
