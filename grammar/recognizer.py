@@ -31,6 +31,7 @@ from grammar.contexter import InteractionSegment, LiveContexter, Refused, apply_
 from grammar.library import Compiled, compile_library
 from grammar.matcher import Matcher, Segment, match
 from grammar.refiner import Refiner, refine, unread
+from grammar.spotter import Spotter
 from library.manifest import load_combined
 
 
@@ -254,6 +255,7 @@ class _Chain:
         self.finished = False  # its tokens and segments moved to the Live's (closed, or restarted)
         self._held = None  # what the provisional segments were last worked out from
         self._refined_from, self._refined_to = None, []  # the Matcher's provisional segments, refined
+        self.spotter = Spotter() if self.refiner is not None else None  # learned gestures back to back
 
     def feed(self, tokens: list[Token], tape: _Tape, close: bool = False) -> list[Segment]:
         if self.tokens_only:
@@ -348,12 +350,21 @@ class _Chain:
         if self.refiner is None:
             return segments
         settled = (self.matcher.done, tuple((s.action, s.first, s.stop) for s in segments))
+        refiner = self.refiner.fork()
+        self._bind(refiner, tape)
+        refiner.tokens.extend(held)
         if settled != self._refined_from:  # the shapes are compared again once the Matcher's segments change
-            refiner = self.refiner.fork()
-            self._bind(refiner, tape)
-            refiner.tokens.extend(held)
-            self._refined_from, self._refined_to = settled, refiner.push(segments) + refiner.close()
-        return self._refined_to
+            deciding = refiner.fork()
+            self._refined_from, self._refined_to = settled, deciding.push(segments) + deciding.close()
+        return self._refined_to + self._spotted(refiner, segments)
+
+    def _spotted(self, refiner: Refiner, segments: list[Segment]) -> list[Segment]:
+        """The learned gestures the :class:`~grammar.spotter.Spotter` names past the Matcher's
+        provisional ``segments`` (back to back, before the Refiner decides them)."""
+        floor = max([self.matcher.done] + [s.stop for s in segments])
+        tokens = refiner.tokens
+        return [Segment(refiner.shapes.names[k], f, e, tokens[f].start, tokens[e - 1].end, edits == 0.0, edits)
+                for f, e, k, edits in self.spotter.spots(refiner, len(self.tokens), floor)]
 
 
 def _shifted(s: Segment, samples: int, tokens: int) -> Segment:

@@ -524,9 +524,9 @@ class Refiner:
                     edits.append(auto.accept_costs(d))
         if not windows:
             return None
-        ds = self._distances(windows)
+        ds = self.distances(windows)
         edits = np.array(edits)
-        alone = np.where(self._fits(edits, ds, windows), edits + WEIGHT * ds, np.inf)
+        alone = np.where(self.fits(edits, ds, windows), edits + WEIGHT * ds, np.inf)
         score = alone.min(axis=1)
         one = min((score[i] for i, (f, e) in enumerate(windows) if f in heads and e >= b - TRIM), default=np.inf)
         firsts = [i for i, (f, e) in enumerate(windows) if f in heads and e in cuts]
@@ -543,16 +543,16 @@ class Refiner:
         k1, k2 = int(np.argmin(alone[i])), int(np.argmin(alone[j]))
         return (*windows[i], k1, float(edits[i, k1])), (*windows[j], k2, float(edits[j, k2]))
 
-    def _fits(self, edits: np.ndarray, ds: np.ndarray, windows: list, strict: float = 1.0) -> np.ndarray:
+    def fits(self, edits: np.ndarray, ds: np.ndarray, windows: list, strict: float = 1.0) -> np.ndarray:
         """(windows, actions): each window is the action it is nearest (``edits + WEIGHT ×
         shape distance``, among those allowed on this track and whose examples last about
-        as long as it: :meth:`_lasts`), if its shape distance is within ``strict`` × that
+        as long as it: :meth:`lasts`), if its shape distance is within ``strict`` × that
         action's rejection distance."""
-        own = np.where(self._allowed & np.isfinite(ds) & self._lasts(windows), edits + WEIGHT * ds, np.inf)
+        own = np.where(self._allowed & np.isfinite(ds) & self.lasts(windows), edits + WEIGHT * ds, np.inf)
         return (np.isfinite(own) & (own == own.min(axis=1, keepdims=True))
                 & (ds <= strict * self.shapes.reject[None, :]))
 
-    def _lasts(self, windows: list) -> np.ndarray:
+    def lasts(self, windows: list) -> np.ndarray:
         """(windows, actions): whether each window lasts no more than :data:`TEMPO` × the
         action's longest example and no less than its shortest / :data:`TEMPO` (True where
         the examples' durations or the samples' times are not known). Arc-length resampling
@@ -615,7 +615,7 @@ class Refiner:
                     edits.append(auto.accept_costs(d))
         if not windows:
             return None
-        ds = self._distances(windows)  # (windows, actions)
+        ds = self.distances(windows)  # (windows, actions)
         edits = np.array(edits)
         cost = ds
         if motion is not None:
@@ -625,7 +625,7 @@ class Refiner:
                 inside = np.array([(cum[min(max(e, a), b) - a] - cum[min(max(f, a), b) - a]) / cum[-1]
                                    for f, e in windows])[:, None]
                 cost = inside * ds + (1.0 - inside) * self.shapes.reject[None, :]
-        score = np.where(self._fits(edits, ds, windows, strict), edits + WEIGHT * cost, np.inf)
+        score = np.where(self.fits(edits, ds, windows, strict), edits + WEIGHT * cost, np.inf)
         if motion is not None and tuple(motion) in windows:  # a whole motion that fits is one gesture
             m = windows.index(tuple(motion))
             if np.isfinite(score[m]).any():
@@ -635,7 +635,7 @@ class Refiner:
             return None
         return windows[w][0], windows[w][1], int(k), float(edits[w, k])
 
-    def _distances(self, windows: list) -> np.ndarray:
+    def distances(self, windows: list) -> np.ndarray:
         """(windows, actions): the shape distances of :meth:`ShapeSet.distances_of`, each
         window's worked out once. A window's distances depend only on its samples, which
         never change once recorded: they are kept by the samples it spans (shared with the

@@ -218,3 +218,37 @@ def test_real_gestures_learned_are_named_provisionally_as_decided(tmp_path):
     covered = [a for a in soon.agree if a is not None]
     assert len(covered) >= len(classes) // 2 and np.mean(covered) >= 0.8
     assert np.median(soon.named) < np.median(soon.final)
+
+
+def test_real_gestures_learned_back_to_back_are_named_as_they_end(tmp_path):
+    """Learned gestures performed one after another without a pause (a held-out take of each
+    of one person's gestures, the built-in actions loaded too): the Refiner decides each once
+    its motion's end is known — seconds later — but the Spotter names them provisionally as
+    they end; finals still equal the batch; no spotted window holds a pause."""
+    from bench.learning_protocol import ROOT, load as load_vive, make_library, stream
+    from grammar.recognizer import _Chain
+
+    if not sorted(ROOT.glob("*/*/*.csv")):
+        pytest.skip("real Vive recordings not found")
+    data = load_vive()
+    user = sorted(data)[2]
+    classes = sorted(data[user])
+    compiled = load_actions(make_library(tmp_path / user, {g: data[user][g][:3] for g in classes}, ("c0",)), True)
+    doodle, _ = stream([(g, d.select(["c0"])) for g in classes for d in data[user][g][3:4]],
+                       np.random.default_rng(1), idle=False)
+    spotted, spotting = [], _Chain._spotted
+
+    def spy(chain, refiner, segments):
+        out = spotting(chain, refiner, segments)
+        spotted.extend((s, refiner.tokens[s.first:s.stop]) for s in out)
+        return out
+
+    _Chain._spotted = spy
+    try:
+        replayed = replay(doodle, compiled)
+    finally:
+        _Chain._spotted = spotting
+    finals_equal_batch(doodle, replayed, compiled)
+    soon = latencies(doodle, replayed)
+    assert np.median(soon.named) <= 0.3 < np.median(soon.final)
+    assert spotted and all(k.name != "T_STILL" for _, tokens in spotted for k in tokens)

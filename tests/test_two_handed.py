@@ -144,13 +144,13 @@ def test_shape_distances_kept_only_once_every_track_read_has_reached_them(librar
         return r
 
     live = refiner(end - 1)  # the other hand one sample short of the window's end
-    early = live._distances([window])
+    early = live.distances([window])
     assert not np.isfinite(early).any()  # the two-handed actions cannot be read yet
     live.others["c1"] = (c1.p, c1.q, c1.valid)
-    fresh = refiner(len(c1.t))._distances([window])
+    fresh = refiner(len(c1.t)).distances([window])
     assert np.isfinite(fresh).any()
-    assert np.array_equal(live._distances([window]), fresh)
-    assert np.array_equal(live._distances([window]), fresh)  # and now kept
+    assert np.array_equal(live.distances([window]), fresh)
+    assert np.array_equal(live.distances([window]), fresh)  # and now kept
 
 
 def test_shape_distances_forgotten_beyond_the_limit_are_worked_out_again(library, monkeypatch):
@@ -177,7 +177,7 @@ def test_shape_distances_forgotten_beyond_the_limit_are_worked_out_again(library
     assert len(windows) >= 4
     monkeypatch.setattr(refiner_module, "SEEN", 2)
     small = refiner()
-    small._distances(windows[:2])
+    small.distances(windows[:2])
     for chosen in (windows[:1] + windows[2:4], windows[1:4], windows):
-        assert np.array_equal(small._distances(chosen), refiner()._distances(chosen), equal_nan=True)
+        assert np.array_equal(small.distances(chosen), refiner().distances(chosen), equal_nan=True)
         assert len(small._seen) <= 2 * len(chosen)

@@ -1,0 +1,121 @@
+"""Learned gestures named as they end, when they follow each other without a pause: live
+provisional labels only (:class:`grammar.recognizer.Live`); what is final is the Refiner's.
+
+Back to back, the Matcher keeps a learned action's continuations open and the Refiner decides
+a learned gesture once the pause after its motion is known, or :data:`~grammar.refiner.SPOT_MAX`
+tokens later without one — seconds after the gesture ended. A :class:`Spotter` reads the
+tokens past what the Matcher has settled, one at a time, and scores, at every token boundary,
+the windows ending there. A window starts at the spotter's anchor — where the last gesture it
+named ended, a pause ended, or what the Matcher settled ends: back to back, where the next
+gesture begins — or up to :data:`~grammar.refiner.TRIM` tokens after it (what the Refiner's
+windows may give up at their start); it holds at least :data:`~grammar.refiner.SPOT_TOKENS`
+tokens and no pause, and is the learned action it is nearest by the Refiner's own rule
+(``edits + WEIGHT × shape distance``, within the action's examples' durations:
+:meth:`Refiner.fits`) — here only when its shape distance is within :data:`SURE` of the
+action's rejection distance, not the whole of it: a gesture's first part fits a shorter
+gesture loosely, a whole gesture its own closely. (SURE was chosen by leave-one-user-out on
+the real users' held-out takes streamed back to back: per user, the value among 0.3–1.0 whose
+spots, on the other four users, best balance naming the final action against leaving out
+spots that name it — 0.4 in every fold.) The best window ending at a boundary is spotted once
+every window ending at each of the :data:`LAG` boundaries after it scores worse: the gesture
+fits best there and what follows is another motion. The anchor then moves to its end. This
+is continuous segmentation by a score read as the stream goes on, in the spirit of Machete
+(Taranta, Pittman, Maghoumi, Maslych, Moolenaar & LaViola 2021, "Machete: easy, efficient,
+and precise continuous custom gesture segmentation", ACM TOCHI 28(1)). A pause ends every
+window: gestures a pause apart are named by the Refiner's own provisional reading, soon after
+the pause begins.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from grammar.refiner import SPOT_MAX, SPOT_TOKENS, TRIM, WEIGHT, Refiner
+
+LAG = 2  # token boundaries after a window that must score worse before it is spotted
+SURE = 0.4  # a window is spotted only when its shape distance is within this part of its action's rejection distance
+
+
+class Spotter:
+    """One track's spotting state over its final tokens (the Refiner's ``tokens``): the
+    automaton's costs of every window start still open, and the best window per end."""
+
+    def __init__(self):
+        self.anchor = 0  # no window starts before this token
+        self._n = 0  # final tokens read
+        self._states: dict[int, np.ndarray] = {}  # window start -> automaton costs of its tokens so far
+        self._scores: dict[int, tuple | None] = {}  # window end -> (score, first, stop, action, edits) or None
+        self.spotted: list[tuple] = []  # (first, stop, action, edits) from final tokens, in order
+
+    def spots(self, refiner: Refiner, final: int, floor: int) -> list[tuple]:
+        """The windows spotted from token ``floor`` on, ``(first, stop, action, edits)`` in
+        order: ``refiner`` bound to the track's samples, its ``tokens`` the ``final`` tokens
+        then those held back as they stand (what may yet change: read on a copy, at most one
+        window spotted there)."""
+        if floor > self.anchor:
+            self._move(floor)
+        while self._n < final:
+            self._read(refiner, self._n, self._states, self._scores, keep=True)
+        self.spotted = [s for s in self.spotted if s[0] >= floor]
+        states, scores, anchor = dict(self._states), dict(self._scores), self.anchor
+        for k in range(final, len(refiner.tokens)):
+            spot = self._read(refiner, k, states, scores, keep=False, anchor=anchor)
+            if spot is not None:
+                return self.spotted + [spot]
+        return list(self.spotted)
+
+    def _move(self, anchor: int) -> None:
+        self.anchor = anchor
+        self._states = {f: d for f, d in self._states.items() if f >= anchor}
+        self._scores = {e: s for e, s in self._scores.items() if e <= anchor or (s is not None and s[1] >= anchor)}
+
+    def _read(self, refiner: Refiner, k: int, states: dict, scores: dict, keep: bool, anchor: int | None = None):
+        """Token ``k`` read into ``states`` and ``scores``; the window it spots, if any (kept,
+        and the anchor moved, when ``keep``)."""
+        from doodle.core.tokens import CODES
+
+        auto = refiner.shapes.automaton
+        token = refiner.tokens[k]
+        anchor = self.anchor if anchor is None else anchor
+        if keep:
+            self._n = k + 1
+        if token.name == "T_STILL":  # a pause ends every window
+            states.clear()
+            scores[k + 1] = None
+            if keep:
+                self._move(k + 1)
+            return None
+        code = CODES[token.name]
+        for f in list(states):
+            if k + 1 - f > SPOT_MAX:
+                del states[f]
+            else:
+                states[f] = auto.step(states[f], code)
+        states[k] = auto.step(auto.initial.copy(), code)
+        scores[k + 1] = self._best(refiner, states, k + 1, anchor)
+        c = k + 1 - LAG
+        best = scores.get(c)
+        if best is None or best[1] < anchor or any(
+                scores.get(c + j) is not None and scores[c + j][0] <= best[0] for j in range(1, LAG + 1)):
+            return None
+        spot = best[1:]
+        if keep:
+            self.spotted.append(spot)
+            self._move(c)
+        return spot
+
+    @staticmethod
+    def _best(refiner: Refiner, states: dict, e: int, anchor: int):
+        """The best window ending at token boundary ``e`` (of the starts in ``states``), or None."""
+        windows = [(f, e) for f in sorted(states) if f >= anchor and e - f >= SPOT_TOKENS and f <= anchor + TRIM
+                   and int(refiner.valid[refiner.tokens[f].start:refiner.tokens[e - 1].end].sum()) >= 3]
+        windows = [w for w, fits in zip(windows, refiner.lasts(windows).any(axis=1)) if fits] if windows else []
+        if not windows:  # (none lasts about as long as some action's examples)
+            return None
+        ds = refiner.distances(windows)
+        edits = np.array([refiner.shapes.automaton.accept_costs(states[f]) for f, _ in windows])
+        score = np.where(refiner.fits(edits, ds, windows, SURE), edits + WEIGHT * ds, np.inf)
+        w, k = np.unravel_index(int(np.argmin(score)), score.shape)
+        if not np.isfinite(score[w, k]):
+            return None
+        return float(score[w, k]), windows[w][0], windows[w][1], int(k), float(edits[w, k])
