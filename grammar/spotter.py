@@ -67,7 +67,7 @@ class Spotter:
     def _move(self, anchor: int) -> None:
         self.anchor = anchor
         self._states = {f: d for f, d in self._states.items() if f >= anchor}
-        self._scores = {e: s for e, s in self._scores.items() if e <= anchor or (s is not None and s[1] >= anchor)}
+        self._scores = {e: s for e, s in self._scores.items() if e > anchor and (s is None or s[1] >= anchor)}
 
     def _read(self, refiner: Refiner, k: int, states: dict, scores: dict, keep: bool, anchor: int | None = None):
         """Token ``k`` read into ``states`` and ``scores``; the window it spots, if any (kept,
