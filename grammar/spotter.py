@@ -30,7 +30,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from grammar.refiner import SPOT_MAX, SPOT_TOKENS, TRIM, WEIGHT, Refiner
+from grammar.refiner import SPOT_MAX, SPOT_TOKENS, TEMPO, TRIM, WEIGHT, Refiner
 
 LAG = 2  # token boundaries after a window that must score worse before it is spotted
 SURE = 0.4  # a window is spotted only when its shape distance is within this part of its action's rejection distance
@@ -105,9 +105,23 @@ class Spotter:
         return spot
 
     @staticmethod
+    def _lost(refiner: Refiner, anchor: int, e: int) -> bool:
+        """Whether no gesture can start at the anchor any more: a window from :data:`TRIM`
+        tokens after it to boundary ``e`` lasts longer than :data:`~grammar.refiner.TEMPO` × the
+        longest example of every action (a gesture no spot named lies between) — or the
+        examples' durations are not known. Windows then start anywhere after the anchor."""
+        longest = refiner.shapes.longest
+        if refiner.t is None or longest is None or not np.isfinite(np.max(longest)):
+            return True
+        t, tokens = refiner.t, refiner.tokens
+        f = min(anchor + TRIM, e - 1)
+        return float(t[min(tokens[e - 1].end, len(t)) - 1] - t[tokens[f].start]) > TEMPO * float(np.max(longest))
+
+    @staticmethod
     def _best(refiner: Refiner, states: dict, e: int, anchor: int):
         """The best window ending at token boundary ``e`` (of the starts in ``states``), or None."""
-        windows = [(f, e) for f in sorted(states) if f >= anchor and e - f >= SPOT_TOKENS and f <= anchor + TRIM
+        lost = Spotter._lost(refiner, anchor, e)
+        windows = [(f, e) for f in sorted(states) if f >= anchor and e - f >= SPOT_TOKENS and (lost or f <= anchor + TRIM)
                    and int(refiner.valid[refiner.tokens[f].start:refiner.tokens[e - 1].end].sum()) >= 3]
         windows = [w for w, fits in zip(windows, refiner.lasts(windows).any(axis=1)) if fits] if windows else []
         if not windows:  # (none lasts about as long as some action's examples)
