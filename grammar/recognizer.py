@@ -337,8 +337,10 @@ class _Chain:
         """The segments not final yet, as the tokens stand: the Matcher's segments that no
         continuation it still keeps can change, given the tokens the Segmenter holds back
         as they stand (:meth:`Segmenter.held`) — the rules the final decision uses, on a
-        copy — then re-decided by the learned shapes as if the stream ended there. None
-        when what the Segmenter holds back is as it was at the last call."""
+        copy — then re-decided by the learned shapes as if the stream ended there; and after
+        them the learned gestures the Spotter names in the tokens the Matcher has not
+        settled (:meth:`_spotted`). None when what the Segmenter holds back is as it was at
+        the last call."""
         if not self.due():
             return None
         held = self.segmenter.held()
@@ -406,8 +408,9 @@ class Live:
     could be one) — the final decision's own rules on a copy of each track's Matcher, so
     that a segment is provisional only once no continuation the Matcher still keeps could
     change it: typically as soon as the pause after a gesture could be a pause, long before
-    the pause ends and makes it final. Each is reported once (again if its name changes);
-    interactions are only reported final.
+    the pause ends and makes it final. Past what the Matcher has settled, learned gestures
+    performed back to back are named as they end by a :class:`~grammar.spotter.Spotter`.
+    Each is reported once (again if its name changes); interactions are only reported final.
     """
 
     def __init__(self, compiled: Compiled | None, names: list[str], rate: float, params: SegmenterParams = SegmenterParams(),
