@@ -488,12 +488,15 @@ class Live:
     def _provisional(self, name: str) -> list[Heard]:
         """A track's actions newly provisional (:meth:`_Chain.provisional`): behaviour
         states applied as they would be (a refused one is no action), a two-handed action as
-        its first role; each reported once, and again only if its name changes."""
+        its first role — and as its other roles on the other tracks performing it, whose own
+        readings it covers there (as :func:`with_pairs` lays it over them in the batch); each
+        reported once, and again only if its name changes."""
         chain = self.chains[name]
         segments = chain.provisional(self.tape)
         if segments is None:
             return []
         shift, state = len(self._done[name][0]), self._state[name]
+        covered = self._paired_shown(name)
         shown, out = [], []
         for s in segments:
             s = _shifted(s, chain.offset, shift)
@@ -502,15 +505,24 @@ class Live:
                 if not rule.allowed(state):
                     continue
                 state = rule.after(state)
-            if s.action == "unknown":
-                continue
+            if s.action == "unknown" or any(p.start < s.end and s.start < p.end for p in covered):
+                continue  # (what a two-handed action shown on another track covers is that action here)
             if s.action in self._pairs:
                 s = _role(s, s.first, s.stop, 0)
             shown.append(s)
             if not any(o.action == s.action and o.start < s.end and s.start < o.end for o in self._shown[name]):
                 out.append(Heard(name, s, final=False))
         self._shown[name] = shown
-        return out
+        return out + [Heard(other, replace(h.segment, role=role), final=False)  # a two-handed action newly
+                      for h in out if h.segment.action in self._pairs  # shown: on its other tracks too (token
+                      for role, other in enumerate(self._pairs[h.segment.action], 1)  # indices: the deciding track's)
+                      if other in self._shown]
+
+    def _paired_shown(self, name: str) -> list[Segment]:
+        """The two-handed actions shown provisional on the tracks deciding those that read
+        track ``name`` too (:func:`_owners`): the track's own reading there is that action."""
+        return [s for owner in self._owners.get(name, ()) for s in self._shown[owner]
+                if s.action in self._pairs and name in self._pairs[s.action]]
 
     def close(self, flush: dict | None = None) -> Step:
         """End every track; ``flush[name]`` False ends a track where its classification

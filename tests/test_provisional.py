@@ -252,3 +252,32 @@ def test_real_gestures_learned_back_to_back_are_named_as_they_end(tmp_path):
     soon = latencies(doodle, replayed)
     assert np.median(soon.named) <= 0.3 < np.median(soon.final)
     assert spotted and all(k.name != "T_STILL" for _, tokens in spotted for k in tokens)
+
+
+def test_gestures_learned_with_both_hands_are_named_on_both_tracks(tmp_path):
+    """Two-handed gestures (learned from c0 and c1 together) streamed with pauses between:
+    finals equal the batch, and the second hand's track shows the two-handed action
+    provisionally before it is final (once the first hand's track shows it, that hand's own
+    reading as built-in actions is not shown over it any more)."""
+    from bench.learning_protocol import ROOT, load as load_vive, make_library, stream
+
+    if not sorted(ROOT.glob("*/*/*.csv")):
+        pytest.skip("real Vive recordings not found")
+    data = load_vive()
+    user = sorted(data)[1]
+    classes = sorted(data[user])[:6]
+    compiled = load_actions(make_library(tmp_path / user, {g: data[user][g][:3] for g in classes}, ("c0", "c1")),
+                            True)
+    doodle, _ = stream([(g, d.select(["c0", "c1"])) for g in classes for d in data[user][g][3:4]],
+                       np.random.default_rng(1), idle=True)
+    replayed = replay(doodle, compiled)
+    batch = recognize(doodle, compiled)
+    for name in doodle.names:  # (the two-handed actions' roles included)
+        t = doodle.track(name).t
+        assert sorted((r.start, r.action) for r in replayed.found if r.track == name) == \
+            sorted((float(t[s.start]), s.action) for s in batch[name][1] if s.action != "unknown")
+    pairs = [f for f in replayed.found if f.track == "c1" and f.action in classes]
+    assert len(pairs) >= len(classes) // 2
+    for f in pairs:
+        assert any(p.action == f.action and p.start <= f.end and f.start <= p.end and p.at <= f.at
+                   for p in replayed.provisional if p.track == "c1")
