@@ -385,6 +385,9 @@ class Step:
     provisional: list = ()  # Heard (final False): actions newly provisional at this frame
 
 
+TOLD = 64  # provisional labels a track remembers so as to report each once (more than stay undecided at a time)
+
+
 class Live:
     """Streaming recognition of the tracks ``names`` (all sampled together at ``rate``).
 
@@ -434,7 +437,8 @@ class Live:
         self._covered = {n: [] for n in self.names}  # samples of two-handed actions heard, laid over a partner
         self._settled_at = {n: (None, False) for n in self.names}  # what _settled last read, and whether at rest
         self._state = {n: frozenset(compiled.library.states if compiled is not None else ()) for n in self.names}
-        self._shown = {n: [] for n in self.names}  # the provisional segments last reported, per track
+        self._shown = {n: [] for n in self.names}  # the provisional segments last worked out, per track
+        self._told = {n: [] for n in self.names}  # the provisional segments last reported, in order (TOLD)
         self._turn = 0  # the track whose provisional actions are worked out first at the next frame
         self._contexter = None
         if compiled is not None and len(self.names) > 1 and compiled.library.interactions:
@@ -510,9 +514,12 @@ class Live:
             if s.action in self._pairs:
                 s = _role(s, s.first, s.stop, 0)
             shown.append(s)
-            if not any(o.action == s.action and o.start < s.end and s.start < o.end for o in self._shown[name]):
+            told = [o for o in self._told[name] if o.start < s.end and s.start < o.end]
+            if not told or told[-1].action != s.action:  # new there, or its name changed
                 out.append(Heard(name, s, final=False))
+                self._told[name].append(s)
         self._shown[name] = shown
+        self._told[name] = self._told[name][-TOLD:]
         return out + [Heard(other, replace(h.segment, role=role), final=False)  # a two-handed action newly
                       for h in out if h.segment.action in self._pairs  # shown: on its other tracks too (token
                       for role, other in enumerate(self._pairs[h.segment.action], 1)  # indices: the deciding track's)

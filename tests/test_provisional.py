@@ -252,6 +252,10 @@ def test_real_gestures_learned_back_to_back_are_named_as_they_end(tmp_path):
     soon = latencies(doodle, replayed)
     assert np.median(soon.named) <= 0.3 < np.median(soon.final)
     assert spotted and all(k.name != "T_STILL" for _, tokens in spotted for k in tokens)
+    shown = replayed.provisional  # a name is shown again over the same motion only after another one
+    for i, p in enumerate(shown):
+        before = [o for o in shown[:i] if o.track == p.track and o.start <= p.end and p.start <= o.end]
+        assert not before or before[-1].action != p.action
 
 
 def test_gestures_learned_with_both_hands_are_named_on_both_tracks(tmp_path):
