@@ -520,10 +520,10 @@ class Live:
                 self._told[name].append(s)
         self._shown[name] = shown
         self._told[name] = self._told[name][-TOLD:]
-        return out + [Heard(other, replace(h.segment, role=role), final=False)  # a two-handed action newly
-                      for h in out if h.segment.action in self._pairs  # shown: on its other tracks too (token
-                      for role, other in enumerate(self._pairs[h.segment.action], 1)  # indices: the deciding track's)
-                      if other in self._shown]
+        # a two-handed action newly shown is shown on its other tracks too (token indices: the deciding track's)
+        return out + [Heard(other, replace(h.segment, role=role), final=False)
+                      for h in out if h.segment.action in self._pairs
+                      for role, other in enumerate(self._pairs[h.segment.action], 1) if other in self._shown]
 
     def _paired_shown(self, name: str) -> list[Segment]:
         """The two-handed actions shown provisional on the tracks deciding those that read
