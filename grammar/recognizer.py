@@ -355,10 +355,10 @@ class _Chain:
         refiner = self.refiner.fork()
         self._bind(refiner, tape)
         refiner.tokens.extend(held)
+        spotted = self._spotted(refiner, segments)  # (reads the fork's samples and tokens, changes nothing)
         if settled != self._refined_from:  # the shapes are compared again once the Matcher's segments change
-            deciding = refiner.fork()
-            self._refined_from, self._refined_to = settled, deciding.push(segments) + deciding.close()
-        return self._refined_to + self._spotted(refiner, segments)
+            self._refined_from, self._refined_to = settled, refiner.push(segments) + refiner.close()
+        return self._refined_to + spotted
 
     def _spotted(self, refiner: Refiner, segments: list[Segment]) -> list[Segment]:
         """The learned gestures the :class:`~grammar.spotter.Spotter` names past the Matcher's

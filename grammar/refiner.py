@@ -519,14 +519,13 @@ class Refiner:
             for e in range(f + 1, b + 1):
                 d = auto.step(d, CODES[self.tokens[e - 1].name])
                 if (e >= b - TRIM or (f in heads and e in cuts)) and e - f >= SPOT_TOKENS \
-                        and int(self.valid[self.tokens[f].start:self.tokens[e - 1].end].sum()) >= 3:
+                        and self.readable(f, e):
                     windows.append((f, e))
                     edits.append(auto.accept_costs(d))
         if not windows:
             return None
-        ds = self.distances(windows)
         edits = np.array(edits)
-        alone = np.where(self.fits(edits, ds, windows), edits + WEIGHT * ds, np.inf)
+        _, alone = self.nearest(windows, edits)
         score = alone.min(axis=1)
         one = min((score[i] for i, (f, e) in enumerate(windows) if f in heads and e >= b - TRIM), default=np.inf)
         firsts = [i for i, (f, e) in enumerate(windows) if f in heads and e in cuts]
@@ -551,6 +550,17 @@ class Refiner:
         own = np.where(self._allowed & np.isfinite(ds) & self.lasts(windows), edits + WEIGHT * ds, np.inf)
         return (np.isfinite(own) & (own == own.min(axis=1, keepdims=True))
                 & (ds <= strict * self.shapes.reject[None, :]))
+
+    def readable(self, f: int, e: int) -> bool:
+        """Whether tokens f..e hold samples enough for a shape (three tracked ones)."""
+        return int(self.valid[self.tokens[f].start:self.tokens[e - 1].end].sum()) >= 3
+
+    def nearest(self, windows: list, edits: np.ndarray, strict: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
+        """``(shape distances, scores)``, both (windows, actions): each window's score
+        ``edits + WEIGHT × shape distance`` for the action it is (:meth:`fits`, within
+        ``strict`` × its rejection distance), inf for the others."""
+        ds = self.distances(windows)
+        return ds, np.where(self.fits(edits, ds, windows, strict), edits + WEIGHT * ds, np.inf)
 
     def lasts(self, windows: list) -> np.ndarray:
         """(windows, actions): whether each window lasts no more than :data:`TEMPO` × the
@@ -609,8 +619,7 @@ class Refiner:
                     break
                 if not any(lo <= e <= hi for lo, hi in ends) or names[e - 1] == "T_STILL" or (f, e) == without:
                     continue
-                a, b = self.tokens[f].start, self.tokens[e - 1].end
-                if int(self.valid[a:b].sum()) >= 3:
+                if self.readable(f, e):
                     windows.append((f, e))
                     edits.append(auto.accept_costs(d))
         if not windows:

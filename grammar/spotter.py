@@ -11,7 +11,7 @@ gesture begins — or up to :data:`~grammar.refiner.TRIM` tokens after it (what 
 windows may give up at their start); it holds at least :data:`~grammar.refiner.SPOT_TOKENS`
 tokens and no pause, and is the learned action it is nearest by the Refiner's own rule
 (``edits + WEIGHT × shape distance``, within the action's examples' durations:
-:meth:`Refiner.fits`) — here only when its shape distance is within :data:`SURE` of the
+:meth:`Refiner.nearest`) — here only when its shape distance is within :data:`SURE` of the
 action's rejection distance, not the whole of it: a gesture's first part fits a shorter
 gesture loosely, a whole gesture its own closely. (SURE was chosen by leave-one-user-out on
 the real users' held-out takes streamed back to back: per user, the value among 0.3–1.0 whose
@@ -30,7 +30,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from grammar.refiner import SPOT_MAX, SPOT_TOKENS, TEMPO, TRIM, WEIGHT, Refiner
+from grammar.refiner import SPOT_MAX, SPOT_TOKENS, TEMPO, TRIM, Refiner
 
 LAG = 2  # token boundaries after a window that must score worse before it is spotted
 SURE = 0.4  # a window is spotted only when its shape distance is within this part of its action's rejection distance
@@ -122,13 +122,12 @@ class Spotter:
         """The best window ending at token boundary ``e`` (of the starts in ``states``), or None."""
         lost = Spotter._lost(refiner, anchor, e)
         windows = [(f, e) for f in sorted(states) if f >= anchor and e - f >= SPOT_TOKENS and (lost or f <= anchor + TRIM)
-                   and int(refiner.valid[refiner.tokens[f].start:refiner.tokens[e - 1].end].sum()) >= 3]
+                   and refiner.readable(f, e)]
         windows = [w for w, fits in zip(windows, refiner.lasts(windows).any(axis=1)) if fits] if windows else []
         if not windows:  # (none lasts about as long as some action's examples)
             return None
-        ds = refiner.distances(windows)
         edits = np.array([refiner.shapes.automaton.accept_costs(states[f]) for f, _ in windows])
-        score = np.where(refiner.fits(edits, ds, windows, SURE), edits + WEIGHT * ds, np.inf)
+        _, score = refiner.nearest(windows, edits, SURE)
         w, k = np.unravel_index(int(np.argmin(score)), score.shape)
         if not np.isfinite(score[w, k]):
             return None
