@@ -339,8 +339,10 @@ class _Chain:
         as they stand (:meth:`Segmenter.held`) — the rules the final decision uses, on a
         copy — then re-decided by the learned shapes as if the stream ended there; and after
         them the learned gestures the Spotter names in the tokens the Matcher has not
-        settled (:meth:`_spotted`). None when what the Segmenter holds back is as it was at
-        the last call."""
+        settled (:meth:`_spotted`), where a segment decided as if the stream ended reaches
+        into one (as far as :data:`~grammar.refiner.REACH` tokens past the Matcher's) ending
+        where it begins. None when what the Segmenter holds back is as it was at the last
+        call."""
         if not self.due():
             return None
         held = self.segmenter.held()
@@ -358,7 +360,11 @@ class _Chain:
         spotted = self._spotted(refiner, segments)  # (reads the fork's samples and tokens, changes nothing)
         if settled != self._refined_from:  # the shapes are compared again once the Matcher's segments change
             self._refined_from, self._refined_to = settled, refiner.push(segments) + refiner.close()
-        return self._refined_to + spotted
+        refined = self._refined_to
+        if spotted:  # one reading per motion: what is decided as if the stream ended gives way to what is spotted
+            f = spotted[0].first
+            refined = [r if r.stop <= f else replace(r, stop=f, end=refiner.tokens[f - 1].end) for r in refined if r.first < f]
+        return refined + spotted
 
     def _spotted(self, refiner: Refiner, segments: list[Segment]) -> list[Segment]:
         """The learned gestures the :class:`~grammar.spotter.Spotter` names past the Matcher's
@@ -514,16 +520,28 @@ class Live:
             if s.action in self._pairs:
                 s = _role(s, s.first, s.stop, 0)
             shown.append(s)
-            told = [o for o in self._told[name] if o.start < s.end and s.start < o.end]
-            if not told or told[-1].action != s.action:  # new there, or its name changed
+            if self._tell(name, s):
                 out.append(Heard(name, s, final=False))
-                self._told[name].append(s)
         self._shown[name] = shown
-        self._told[name] = self._told[name][-TOLD:]
         # a two-handed action newly shown is shown on its other tracks too (token indices: the deciding track's)
         return out + [Heard(other, replace(h.segment, role=role), final=False)
                       for h in out if h.segment.action in self._pairs
                       for role, other in enumerate(self._pairs[h.segment.action], 1) if other in self._shown]
+
+    def _tell(self, name: str, s: Segment) -> bool:
+        """Whether segment ``s`` is to be reported on track ``name``: nothing was reported
+        over the same motion yet (most of the shorter of the two), or the last report there
+        has another name. Remembered as what is reported there now (in place of what it
+        mostly covers). The same motion, not any overlap: two readings of neighbouring motion
+        that overlap at their ends (one decided as if the stream ended there, the next
+        spotted past it) would otherwise each be reported again at every frame, and a
+        gesture repeated back to back would not be reported the second time."""
+        told = self._told[name]
+        same = [o for o in told if 2 * (min(o.end, s.end) - max(o.start, s.start)) > min(o.end - o.start, s.end - s.start)]
+        if same and same[-1].action == s.action:
+            return False
+        told[:] = [o for o in told if 2 * (min(o.end, s.end) - max(o.start, s.start)) <= o.end - o.start][-TOLD + 1:] + [s]
+        return True
 
     def _paired_shown(self, name: str) -> list[Segment]:
         """The two-handed actions shown provisional on the tracks deciding those that read
