@@ -124,6 +124,11 @@ class Refiner:
         self._done = 0  # tokens before this are decided
         self._unknown = None
 
+    @property
+    def allowed(self) -> np.ndarray:
+        """(actions,): which learned actions may be recognised on this track."""
+        return self._allowed
+
     def fork(self) -> "Refiner":
         """An independent copy (what it is pushed leaves this one as it is)."""
         other = copy.copy(self)
@@ -664,6 +669,12 @@ class Refiner:
                 for span in list(self._seen)[:len(self._seen) - SEEN // 2]:
                     del self._seen[span]
         return out
+
+    def beginnings(self, window: tuple, part: tuple) -> np.ndarray:
+        """(actions,): the shape distance of a window to the best fitting beginning, ``part``
+        of the way (:func:`grammar.shapes.dtw_costs`), of each action's examples, over that
+        action's rejection distance (not kept: only the Spotter asks, of few windows)."""
+        return self.shapes.distances_of([window], self._read, part)[0] / self.shapes.reject
 
     def _read(self, group: Group, window) -> tuple | None:
         """A window's samples of the group's tracks, resampled together (None: a track is missing)."""

@@ -51,10 +51,12 @@ def directions(path: np.ndarray) -> np.ndarray:
     return v / np.maximum(np.linalg.norm(v, axis=1, keepdims=True), 1e-9)
 
 
-def dtw_costs(x: np.ndarray, templates: np.ndarray) -> np.ndarray:
+def dtw_costs(x: np.ndarray, templates: np.ndarray, part: tuple | None = None) -> np.ndarray:
     """DTW cost (squared l2, steps (1,1), (1,0), (0,1)) of x (n, d) — or of each of a batch
     (B, n, d) — against every template (k, m, d) at once, divided by the longer length:
-    (k,), or (B, k)."""
+    (k,), or (B, k). With ``part = (lo, hi)``, open-ended: x against the template's
+    beginning that fits it best, from ``lo`` to ``hi`` of its steps (x as the start of a
+    performance of it; open-end DTW)."""
     templates = np.asarray(templates, dtype=float)
     if templates.ndim == 2:
         templates = templates[None]
@@ -74,7 +76,12 @@ def dtw_costs(x: np.ndarray, templates: np.ndarray) -> np.ndarray:
         base[:, 0] = cost[:, i, 0] + row[:, 0]
         c = np.cumsum(cost[:, i, :], axis=1)
         row = np.minimum.accumulate(base - c, axis=1) + c  # from (i, j-1): a prefix minimum
-    out = row[:, -1].reshape(b, k) / max(n, m)
+    if part is None:
+        out = row[:, -1].reshape(b, k) / max(n, m)
+    else:
+        j = np.arange(m)
+        ends = (j >= int(part[0] * (m - 1))) & (j <= int(part[1] * (m - 1)))
+        out = np.where(ends, row / np.maximum(n, j + 1), np.inf).min(axis=1).reshape(b, k)
     return out[0] if single else out
 
 
@@ -180,9 +187,10 @@ class ShapeSet:
                          and (not others or present is None or all(o in present for o in others))
                          for b, others in zip(bound, partners)])
 
-    def distances_of(self, windows: list, read) -> np.ndarray:
+    def distances_of(self, windows: list, read, part: tuple | None = None) -> np.ndarray:
         """Per window and action, the shape distance (inf where the action was not scored).
-        ``read(group, window)`` gives a window's (paths, quats) for a group's tracks, or None."""
+        ``read(group, window)`` gives a window's (paths, quats) for a group's tracks, or None.
+        With ``part``, to the examples' beginnings (:func:`dtw_costs`)."""
         out = np.full((len(windows), len(self.names)), np.inf)
         for g in self.groups:
             feats, rows = [], []
@@ -192,7 +200,7 @@ class ShapeSet:
                     feats.append(features(pq[0], pq[1] if g.oriented else None, g.turn))
                     rows.append(w)
             if rows:
-                out[np.array(rows)[:, None], np.unique(g.owner)[None, :]] = _nearest(g, np.array(feats))
+                out[np.array(rows)[:, None], np.unique(g.owner)[None, :]] = _nearest(g, np.array(feats), part)
         return out
 
     def distances(self, x: np.ndarray) -> np.ndarray:
@@ -207,12 +215,13 @@ class ShapeSet:
         return out[0] if single else out
 
 
-def _nearest(group: Group, x: np.ndarray) -> np.ndarray:
-    """(B, actions of the group): the smallest DTW cost of each of x to each action's examples."""
+def _nearest(group: Group, x: np.ndarray, part: tuple | None = None) -> np.ndarray:
+    """(B, actions of the group): the smallest DTW cost of each of x to each action's examples
+    (with ``part``, to their beginnings: :func:`dtw_costs`)."""
     if len(x) * len(group.templates) > CHUNK:  # bounded memory: in chunks
         step = max(1, CHUNK // len(group.templates))
-        return np.concatenate([_nearest(group, x[k:k + step]) for k in range(0, len(x), step)])
-    costs = dtw_costs(x, group.templates)
+        return np.concatenate([_nearest(group, x[k:k + step], part) for k in range(0, len(x), step)])
+    costs = dtw_costs(x, group.templates, part)
     starts = np.searchsorted(group.owner, np.unique(group.owner))
     return np.minimum.reduceat(costs, starts, axis=-1)
 

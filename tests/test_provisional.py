@@ -260,6 +260,39 @@ def test_real_gestures_learned_back_to_back_are_named_as_they_end(tmp_path):
     assert len(shown) <= 3 * len(replayed.found)  # (not two readings overlapping at their ends, in turn at every frame)
 
 
+class _InOrder:
+    """An rng for :func:`bench.learning_protocol.stream` that keeps the pieces in order."""
+
+    @staticmethod
+    def permutation(n):
+        return np.arange(n)
+
+
+def test_a_gesture_beginning_like_a_shorter_one_is_named_once_it_goes_on(tmp_path):
+    """One person's left-right-left combo, back to back between two other gestures: its
+    first two punches fit their hook_right whole, closely enough to be spotted; they also
+    fit the combo's own beginning more closely, so the Spotter holds them back while the
+    motion goes on as the combo, and names the combo (as the final decision does), before
+    the combo ends — not a hook_right first."""
+    from bench.learning_protocol import ROOT, load as load_vive, make_library, stream
+
+    if not sorted(ROOT.glob("*/*/*.csv")):
+        pytest.skip("real Vive recordings not found")
+    data = load_vive()
+    user = sorted(data)[1]
+    classes = sorted(data[user])
+    compiled = load_actions(make_library(tmp_path / user, {g: data[user][g][:3] for g in classes}, ("c0",)), True)
+    doodle, truth = stream([(g, data[user][g][3].select(["c0"])) for g in ("golf_swing", "left_right_left_combo", "backflip")],
+                           _InOrder(), idle=False)
+    replayed = replay(doodle, compiled)
+    finals_equal_batch(doodle, replayed, compiled)
+    _, a, b = truth[1]
+    combo = [f for f in replayed.found if a < (f.start + f.end) / 2 < b and f.action != "Idle"]
+    assert [f.action for f in combo] == ["left_right_left_combo"]
+    shown = [p for p in replayed.provisional if a < (p.start + p.end) / 2 < b and p.action != "Idle"]
+    assert [p.action for p in shown] == ["left_right_left_combo"] and shown[0].at <= combo[0].end
+
+
 def test_gestures_learned_with_both_hands_are_named_on_both_tracks(tmp_path):
     """Two-handed gestures (learned from c0 and c1 together) streamed with pauses between:
     finals equal the batch, and the second hand's track shows the two-handed action

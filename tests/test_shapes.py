@@ -37,6 +37,22 @@ def test_batched_dtw_equals_one_by_one(n, m, k, seed):
     assert np.allclose(batch[0], one) and np.allclose(batch[1], shapes.dtw_costs(x[::-1], templates))
 
 
+@settings(max_examples=25, deadline=None)
+@given(st.integers(3, 12), st.integers(6, 15), st.integers(1, 4), st.integers(0, 2**31))
+def test_a_beginning_is_found_by_open_ended_dtw(n, m, k, seed):
+    """Open-ended (``part``): never more than to the whole template, zero for a template's
+    own beginning within the part searched, and the cost to the whole when the part is the
+    last step alone."""
+    rng = np.random.default_rng(seed)
+    x, templates = rng.normal(size=(n, 3)), rng.normal(size=(k, m, 3))
+    whole = shapes.dtw_costs(x, templates)
+    assert np.all(shapes.dtw_costs(x, templates, (0.0, 1.0)) <= whole + 1e-12)
+    assert np.allclose(shapes.dtw_costs(x, templates, (1.0, 1.0)), whole)
+    j = int(rng.integers((m - 1) // 3 + 1, m))  # a beginning of j steps of the first template
+    part = shapes.dtw_costs(templates[0, :j], templates, (1 / 3, 1.0))
+    assert part[0] < 1e-9 and part.shape == (k,)
+
+
 def test_resampled_directions_ignore_speed_and_place():
     s = np.linspace(0, 1, 200)
     path = np.column_stack([np.cos(3 * s), np.sin(3 * s), s])
