@@ -506,7 +506,7 @@ class Live:
         if segments is None:
             return []
         shift, state = len(self._done[name][0]), self._state[name]
-        covered = self._paired_shown(name)
+        covered = [(p.start, p.end) for p in self._paired_shown(name)] + self._covered[name]  # (provisional, final)
         shown, out = [], []
         for s in segments:
             s = _shifted(s, chain.offset, shift)
@@ -515,7 +515,7 @@ class Live:
                 if not rule.allowed(state):
                     continue
                 state = rule.after(state)
-            if s.action == "unknown" or any(p.start < s.end and s.start < p.end for p in covered):
+            if s.action == "unknown" or any(a < s.end and s.start < b for a, b in covered):
                 continue  # (what a two-handed action shown on another track covers is that action here)
             if s.action in self._pairs:
                 s = _role(s, s.first, s.stop, 0)
