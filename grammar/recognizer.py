@@ -256,6 +256,8 @@ class _Chain:
         self._held = None  # what the provisional segments were last worked out from
         self._refined_from, self._refined_to = None, []  # the Matcher's provisional segments, refined
         self.spotter = Spotter() if self.refiner is not None else None  # learned gestures back to back
+        self._read_to = None  # the provisional reading's fork of the Refiner, as last worked out
+        self._begun = (None, False)  # what pair_begun last answered, and for what
 
     def feed(self, tokens: list[Token], tape: _Tape, close: bool = False) -> list[Segment]:
         if self.tokens_only:
@@ -358,6 +360,7 @@ class _Chain:
         self._bind(refiner, tape)
         refiner.tokens.extend(held)
         spotted = self._spotted(refiner, segments)  # (reads the fork's samples and tokens, changes nothing)
+        self._read_to = refiner
         if settled != self._refined_from:  # the shapes are compared again once the Matcher's segments change
             self._refined_from, self._refined_to = settled, refiner.push(segments) + refiner.close()
         refined = self._refined_to
@@ -365,6 +368,18 @@ class _Chain:
             f = spotted[0].first
             refined = [r if r.stop <= f else replace(r, stop=f, end=refiner.tokens[f - 1].end) for r in refined if r.first < f]
         return refined + spotted
+
+    def pair_begun(self) -> bool:
+        """Whether this track's motion past what its provisional reading has named so far
+        (the Spotter's anchor on) may be a two-handed action under way: it fits the beginning
+        of one's examples, or the whole of it (:meth:`Spotter.begins_pair`)."""
+        refiner = self._read_to
+        if refiner is None:
+            return False
+        key = (id(refiner), self.spotter.anchor)
+        if self._begun[0] != key:  # (asked again only once the reading or the anchor changed)
+            self._begun = (key, self.spotter.begins_pair(refiner))
+        return self._begun[1]
 
     def _spotted(self, refiner: Refiner, segments: list[Segment]) -> list[Segment]:
         """The learned gestures the :class:`~grammar.spotter.Spotter` names past the Matcher's
@@ -507,9 +522,14 @@ class Live:
             return []
         shift, state = len(self._done[name][0]), self._state[name]
         covered = [(p.start, p.end) for p in self._paired_shown(name)] + self._covered[name]  # (provisional, final)
+        reach, further = self._owners_read(name)
         shown, out = [], []
         for s in segments:
             s = _shifted(s, chain.offset, shift)
+            if s.end > reach and further is not None:
+                reach, further = further(), None
+            if s.end > reach:
+                break  # (a two-handed action under way on a track deciding it may yet be shown there)
             rule = self._rules.get(s.action)
             if rule is not None:
                 if not rule.allowed(state):
@@ -542,6 +562,21 @@ class Live:
             return False
         told[:] = [o for o in told if 2 * (min(o.end, s.end) - max(o.start, s.start)) <= o.end - o.start][-TOLD + 1:] + [s]
         return True
+
+    def _owners_read(self, name: str) -> tuple:
+        """The sample past which track ``name``'s own provisional reading waits: where a track
+        deciding two-handed actions that read it too (:func:`_owners`), whose motion may be
+        one under way (:meth:`_Chain.pair_begun`), has shown what it reads up to (provisional
+        or final) — there, a two-handed action may yet be laid over this track's reading.
+        Infinite when no such track's motion may be one. Given as ``(the least of those
+        samples, a function giving it)``: whether a motion may be a two-handed action under
+        way is worked out only for a segment that ends past all of them."""
+        owners = self._owners.get(name, ())
+        if not owners:
+            return math.inf, None
+        shown = {o: max([self._decided[o]] + [s.end for s in self._shown[o]]) for o in owners}
+        return min(shown.values()), lambda: min((r for o, r in shown.items() if self.chains[o].pair_begun()),
+                                                default=math.inf)
 
     def _paired_shown(self, name: str) -> list[Segment]:
         """The two-handed actions shown provisional on the tracks deciding those that read

@@ -78,6 +78,23 @@ class Spotter:
                 return self.spotted + [spot]
         return list(self.spotted)
 
+    def begins_pair(self, refiner: Refiner) -> bool:
+        """Whether the tokens of ``refiner`` (bound as for :meth:`spots`) from the anchor on,
+        or from up to :data:`~grammar.refiner.TRIM` after it, may be a two-handed action
+        under way: they fit the beginning of one's examples, or all of them (:meth:`_begins`)."""
+        pairs = refiner.shapes.partners
+        e = len(refiner.tokens)
+        if not pairs or e - self.anchor < SPOT_TOKENS:
+            return False
+        two = np.array([bool(others) for others in pairs]) & refiner.allowed
+        for f in range(self.anchor, min(self.anchor + TRIM, e - SPOT_TOKENS) + 1):
+            if any(k.name == "T_STILL" for k in refiner.tokens[f:e]) or not refiner.readable(f, e):
+                continue
+            could = two & Spotter._could_go_on(refiner, f, e)
+            if could.any() and (refiner.beginnings((f, e), (BEGINNING[0], 1.0))[could] <= SURE).any():
+                return True
+        return False
+
     def _move(self, anchor: int) -> None:
         self.anchor = anchor
         self._states = {f: d for f, d in self._states.items() if f >= anchor}

@@ -296,8 +296,9 @@ def test_a_gesture_beginning_like_a_shorter_one_is_named_once_it_goes_on(tmp_pat
 def test_gestures_learned_with_both_hands_are_named_on_both_tracks(tmp_path):
     """Two-handed gestures (learned from c0 and c1 together) streamed with pauses between:
     finals equal the batch, and the second hand's track shows the two-handed action
-    provisionally before it is final, and that hand's own reading (as built-in actions) is not
-    shown under a two-handed action once shown there, provisional or final."""
+    provisionally before it is final; that hand's own reading (as built-in actions) is not
+    shown under a two-handed action once shown there, provisional or final, nor while the
+    first hand's motion may be one under way — most provisional labels name the final action."""
     from bench.learning_protocol import ROOT, load as load_vive, make_library, stream
 
     if not sorted(ROOT.glob("*/*/*.csv")):
@@ -320,6 +321,8 @@ def test_gestures_learned_with_both_hands_are_named_on_both_tracks(tmp_path):
     for f in pairs:
         assert any(p.action == f.action and p.start <= f.end and f.start <= p.end and p.at <= f.at
                    for p in replayed.provisional if p.track == "c1")
+    agree = latencies(doodle, replayed).agree  # (the second hand's own reading waits while a pair may be under way)
+    assert np.mean([a for a in agree if a is not None]) >= 0.9
     second = [p for p in replayed.provisional if p.track == "c1"]
     for p in second:  # the second hand's own reading is not shown over a pair shown there before (provisional or final)
         assert p.action in classes or not any(q.action in classes and q.at <= p.at and q.start < p.end and p.start < q.end
