@@ -257,7 +257,7 @@ class _Chain:
         self._refined_from, self._refined_to = None, []  # the Matcher's provisional segments, refined
         self.spotter = Spotter() if self.refiner is not None else None  # learned gestures back to back
         self._read_to = None  # the provisional reading's fork of the Refiner, as last worked out
-        self._begun = (None, False)  # what pair_begun last answered, and for what
+        self._begun = None  # (the Spotter's anchor, what pair_begun answered) for the reading in _read_to
 
     def feed(self, tokens: list[Token], tape: _Tape, close: bool = False) -> list[Segment]:
         if self.tokens_only:
@@ -360,7 +360,7 @@ class _Chain:
         self._bind(refiner, tape)
         refiner.tokens.extend(held)
         spotted = self._spotted(refiner, segments)  # (reads the fork's samples and tokens, changes nothing)
-        self._read_to = refiner
+        self._read_to, self._begun = refiner, None
         if settled != self._refined_from:  # the shapes are compared again once the Matcher's segments change
             self._refined_from, self._refined_to = settled, refiner.push(segments) + refiner.close()
         refined = self._refined_to
@@ -376,9 +376,8 @@ class _Chain:
         refiner = self._read_to
         if refiner is None:
             return False
-        key = (id(refiner), self.spotter.anchor)
-        if self._begun[0] != key:  # (asked again only once the reading or the anchor changed)
-            self._begun = (key, self.spotter.begins_pair(refiner))
+        if self._begun is None or self._begun[0] != self.spotter.anchor:  # (once per reading and anchor)
+            self._begun = (self.spotter.anchor, self.spotter.begins_pair(refiner))
         return self._begun[1]
 
     def _spotted(self, refiner: Refiner, segments: list[Segment]) -> list[Segment]:

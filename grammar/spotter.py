@@ -87,13 +87,9 @@ class Spotter:
         if not pairs or e - self.anchor < SPOT_TOKENS:
             return False
         two = np.array([bool(others) for others in pairs]) & refiner.allowed
-        for f in range(self.anchor, min(self.anchor + TRIM, e - SPOT_TOKENS) + 1):
-            if any(k.name == "T_STILL" for k in refiner.tokens[f:e]) or not refiner.readable(f, e):
-                continue
-            could = two & Spotter._could_go_on(refiner, f, e)
-            if could.any() and (refiner.beginnings((f, e), (BEGINNING[0], 1.0))[could] <= SURE).any():
-                return True
-        return False
+        return any(Spotter._may_begin(refiner, f, e, two).any()
+                   for f in range(self.anchor, min(self.anchor + TRIM, e - SPOT_TOKENS) + 1)
+                   if refiner.readable(f, e) and all(k.name != "T_STILL" for k in refiner.tokens[f:e]))
 
     def _move(self, anchor: int) -> None:
         self.anchor = anchor
@@ -171,11 +167,22 @@ class Spotter:
 
     @staticmethod
     def _begins(refiner: Refiner, f: int, e: int, b: int) -> bool:
-        """Whether window f..e may still be action ``b``'s beginning, or the whole of it: it
-        lasts less than :data:`~grammar.refiner.TEMPO` × its longest example, and fits its
-        examples' beginnings (from :data:`BEGINNING`'s first part to all of them) within
-        :data:`SURE` of its rejection distance."""
-        return bool(Spotter._could_go_on(refiner, f, e)[b]) and refiner.beginnings((f, e), (BEGINNING[0], 1.0))[b] <= SURE
+        """Whether window f..e may still be action ``b``'s beginning, or the whole of it
+        (:meth:`_may_begin`)."""
+        among = np.zeros(len(refiner.shapes.names), dtype=bool)
+        among[b] = True
+        return bool(Spotter._may_begin(refiner, f, e, among)[b])
+
+    @staticmethod
+    def _may_begin(refiner: Refiner, f: int, e: int, among: np.ndarray) -> np.ndarray:
+        """(actions,): which of the actions ``among`` window f..e may be the beginning of, or
+        the whole of: it lasts less than :data:`~grammar.refiner.TEMPO` × the action's longest
+        example, and fits its examples' beginnings (from :data:`BEGINNING`'s first part to all
+        of them) within :data:`SURE` of its rejection distance (no DTW when none could last)."""
+        could = among & Spotter._could_go_on(refiner, f, e)
+        if not could.any():
+            return could
+        return could & (refiner.beginnings((f, e), (BEGINNING[0], 1.0)) <= SURE)
 
     @staticmethod
     def _could_go_on(refiner: Refiner, f: int, e: int) -> np.ndarray:

@@ -197,19 +197,29 @@ def test_replay_and_record_show_provisional_names(compiled, capsys, tmp_path, mo
         "Side Walk Left\n")
 
 
-def test_real_gestures_learned_are_named_provisionally_as_decided(tmp_path):
-    """One person's gestures learned from three takes (``doodle learn``'s function) and the
-    held-out takes streamed one after another: finals equal the batch, the provisional
-    names are the final ones in most cases."""
-    from bench.learning_protocol import ROOT, load as load_vive, make_library, stream
+def _learned(tmp_path, k: int, tracks=("c0",), builtin: bool = True, first: int | None = None):
+    """The k-th real user's Vive recordings, their gestures (the first ``first``, or all)
+    learned from three takes each on ``tracks`` (``doodle learn``'s function) with or
+    without the built-in actions: ``(data, user, classes, compiled)`` — skipped without the
+    recordings."""
+    from bench.learning_protocol import ROOT, load as load_vive, make_library
 
     if not sorted(ROOT.glob("*/*/*.csv")):
         pytest.skip("real Vive recordings not found")
     data = load_vive()
-    user = sorted(data)[1]
-    classes = sorted(data[user])
-    folder = make_library(tmp_path / user, {g: data[user][g][:3] for g in classes}, ("c0",))
-    compiled = load_actions(folder, False)
+    user = sorted(data)[k]
+    classes = sorted(data[user])[:first]
+    compiled = load_actions(make_library(tmp_path / user, {g: data[user][g][:3] for g in classes}, tracks), builtin)
+    return data, user, classes, compiled
+
+
+def test_real_gestures_learned_are_named_provisionally_as_decided(tmp_path):
+    """One person's gestures learned from three takes (``doodle learn``'s function) and the
+    held-out takes streamed one after another: finals equal the batch, the provisional
+    names are the final ones in most cases."""
+    from bench.learning_protocol import stream
+
+    data, user, classes, compiled = _learned(tmp_path, 1, builtin=False)
     doodle, _ = stream([(g, d.select(["c0"])) for g in classes for d in data[user][g][3:4]],
                        np.random.default_rng(1), idle=True)
     replayed = replay(doodle, compiled)
@@ -225,15 +235,10 @@ def test_real_gestures_learned_back_to_back_are_named_as_they_end(tmp_path):
     of one person's gestures, the built-in actions loaded too): the Refiner decides each once
     its motion's end is known — seconds later — but the Spotter names them provisionally as
     they end; finals still equal the batch; no spotted window holds a pause."""
-    from bench.learning_protocol import ROOT, load as load_vive, make_library, stream
+    from bench.learning_protocol import stream
     from grammar.recognizer import _Chain
 
-    if not sorted(ROOT.glob("*/*/*.csv")):
-        pytest.skip("real Vive recordings not found")
-    data = load_vive()
-    user = sorted(data)[2]
-    classes = sorted(data[user])
-    compiled = load_actions(make_library(tmp_path / user, {g: data[user][g][:3] for g in classes}, ("c0",)), True)
+    data, user, classes, compiled = _learned(tmp_path, 2)
     doodle, _ = stream([(g, d.select(["c0"])) for g in classes for d in data[user][g][3:4]],
                        np.random.default_rng(1), idle=False)
     spotted, spotting = [], _Chain._spotted
@@ -274,14 +279,9 @@ def test_a_gesture_beginning_like_a_shorter_one_is_named_once_it_goes_on(tmp_pat
     fit the combo's own beginning more closely, so the Spotter holds them back while the
     motion goes on as the combo, and names the combo (as the final decision does), before
     the combo ends — not a hook_right first."""
-    from bench.learning_protocol import ROOT, load as load_vive, make_library, stream
+    from bench.learning_protocol import stream
 
-    if not sorted(ROOT.glob("*/*/*.csv")):
-        pytest.skip("real Vive recordings not found")
-    data = load_vive()
-    user = sorted(data)[1]
-    classes = sorted(data[user])
-    compiled = load_actions(make_library(tmp_path / user, {g: data[user][g][:3] for g in classes}, ("c0",)), True)
+    data, user, _, compiled = _learned(tmp_path, 1)
     doodle, truth = stream([(g, data[user][g][3].select(["c0"])) for g in ("golf_swing", "left_right_left_combo", "backflip")],
                            _InOrder(), idle=False)
     replayed = replay(doodle, compiled)
@@ -299,15 +299,9 @@ def test_gestures_learned_with_both_hands_are_named_on_both_tracks(tmp_path):
     provisionally before it is final; that hand's own reading (as built-in actions) is not
     shown under a two-handed action once shown there, provisional or final, nor while the
     first hand's motion may be one under way — most provisional labels name the final action."""
-    from bench.learning_protocol import ROOT, load as load_vive, make_library, stream
+    from bench.learning_protocol import stream
 
-    if not sorted(ROOT.glob("*/*/*.csv")):
-        pytest.skip("real Vive recordings not found")
-    data = load_vive()
-    user = sorted(data)[1]
-    classes = sorted(data[user])[:6]
-    compiled = load_actions(make_library(tmp_path / user, {g: data[user][g][:3] for g in classes}, ("c0", "c1")),
-                            True)
+    data, user, classes, compiled = _learned(tmp_path, 1, ("c0", "c1"), first=6)
     doodle, _ = stream([(g, d.select(["c0", "c1"])) for g in classes for d in data[user][g][3:4]],
                        np.random.default_rng(1), idle=True)
     replayed = replay(doodle, compiled)
