@@ -6,9 +6,10 @@ a learned gesture once the pause after its motion is known, or :data:`~grammar.r
 tokens later without one — seconds after the gesture ended. A :class:`Spotter` reads the
 tokens past what the Matcher has settled, one at a time, and scores, at every token boundary,
 the windows ending there. A window starts at the spotter's anchor — where the last gesture it
-named ended, a pause ended, or what the Matcher settled ends: back to back, where the next
-gesture begins — or up to :data:`~grammar.refiner.TRIM` tokens after it (what the Refiner's
-windows may give up at their start); it holds at least :data:`~grammar.refiner.SPOT_TOKENS`
+named ended, a pause ended, or :data:`~grammar.refiner.TRIM` tokens before what the Matcher
+settled ends (what the Refiner may give up at a segment's end, the next gesture may begin
+with): back to back, where the next gesture begins — or up to TRIM tokens after it (what the
+Refiner's windows may give up at their start); it holds at least :data:`~grammar.refiner.SPOT_TOKENS`
 tokens and no pause, and is the learned action it is nearest by the Refiner's own rule
 (``edits + WEIGHT × shape distance``, within the action's examples' durations:
 :meth:`Refiner.nearest`) — here only when its shape distance is within :data:`SURE` of the
@@ -33,7 +34,8 @@ A gesture's first part can fit a shorter gesture whole (a left-right-left combo'
 punches a hook). A window about to be spotted that fits a longer action's beginning — open-end
 DTW against the first :data:`BEGINNING` of its examples, within SURE — more closely than it
 fits its own action whole is held back while the motion goes on as that beginning (or the
-whole of it); once it does not, or at a pause, the window held back is spotted after all. (On
+whole of it); once it does not, or at a pause, the window held back (of two, the one that
+scores better) is spotted after all. (On
 the streams above, leave-one-user-out: the held-out users' labels name the final action as
 often or more often, 90 % of names staying within 0.3 s on the other four users.)
 """
@@ -47,7 +49,7 @@ from grammar.refiner import SPOT_MAX, SPOT_TOKENS, TEMPO, TRIM, Refiner
 LAG = 1  # token boundaries after a window that must score worse before it is spotted
 SURE = 0.4  # a window is spotted only when its shape distance is within this part of its action's rejection distance
 BEGINNING = (1 / 3, 0.8)  # how much of a longer action's examples a window is compared against as their beginning
-HELD = -1  # where a scores dict keeps a window held back: (its end, the window, the longer action it may begin)
+HELD = -1  # where a scores dict keeps a window held back: (its end, the window, the longer action it may begin, its score)
 
 
 class Spotter:
@@ -62,10 +64,12 @@ class Spotter:
         self.spotted: list[tuple] = []  # (first, stop, action, edits) from final tokens, in order
 
     def spots(self, refiner: Refiner, final: int, floor: int) -> list[tuple]:
-        """The windows spotted from token ``floor`` on, ``(first, stop, action, edits)`` in
+        """The windows spotted from token ``floor`` − :data:`~grammar.refiner.TRIM` on
+        (``floor``: where what the Matcher settled ends), ``(first, stop, action, edits)`` in
         order: ``refiner`` bound to the track's samples, its ``tokens`` the ``final`` tokens
         then those held back as they stand (what may yet change: read on a copy, at most one
         window spotted there)."""
+        floor -= TRIM  # (what the Refiner gives up at a segment's end the next gesture may begin with)
         if floor > self.anchor:
             self._move(floor)
         while self._n < final:
@@ -139,7 +143,8 @@ class Spotter:
         spot = best[1:]
         longer = self._longer(refiner, spot)
         if longer is not None:
-            scores[HELD] = (c, spot, longer)
+            if HELD not in scores or scores[HELD][3] > best[0]:  # (the better of two windows held back stays)
+                scores[HELD] = (c, spot, longer, best[0])
             return None
         scores.pop(HELD, None)
         return self._spot(spot, c, keep)

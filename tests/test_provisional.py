@@ -293,6 +293,45 @@ def test_a_gesture_beginning_like_a_shorter_one_is_named_once_it_goes_on(tmp_pat
     assert [p.action for p in shown] == ["left_right_left_combo"] and shown[0].at <= combo[0].end
 
 
+def _in_order(tmp_path, k: int, takes: list):
+    """The k-th real user's gestures learned (built-ins loaded) and the takes ``[(gesture,
+    take)]`` streamed back to back in that order, replayed: ``(doodle, truth, replayed)``."""
+    from bench.learning_protocol import stream
+
+    data, user, _, compiled = _learned(tmp_path, k)
+    doodle, truth = stream([(g, data[user][g][j].select(["c0"])) for g, j in takes], _InOrder(), idle=False)
+    replayed = replay(doodle, compiled)
+    finals_equal_batch(doodle, replayed, compiled)
+    return doodle, truth, replayed
+
+
+def test_a_gesture_begun_within_the_segment_before_is_named_as_it_ends(tmp_path):
+    """Sub_U001's golf swing right after a cartwheel, back to back: the Matcher's segment
+    for the cartwheel reaches into the swing's first tokens (the Refiner gives them back),
+    so the Spotter's windows may begin up to TRIM tokens before what the Matcher settled —
+    the swing is named as it ends, not when the stream does (3.3 s after its end when they
+    could begin only after it)."""
+    doodle, truth, replayed = _in_order(tmp_path, 0, [("cartwheel_right", 3), ("cartwheel_right", 4),
+                                                      ("golf_swing", 3), ("backflip", 3)])
+    _, a, b = truth[2]
+    swing = [f for f in replayed.found if f.action == "golf_swing"]
+    assert len(swing) == 1 and a <= swing[0].start < b
+    shown = [p for p in replayed.provisional if p.action == "golf_swing" and p.start < swing[0].end and swing[0].start < p.end]
+    assert shown and shown[0].at <= b + 0.3
+
+
+def test_of_two_windows_held_back_the_better_is_named(tmp_path):
+    """Sub_U005's hook then uppercut, back to back, fit the beginning of their
+    right-left-right combo: the hook is held back, and as the motion goes on a longer window
+    reaching into the uppercut is held back too, fitting worse. When the motion
+    stops fitting the combo, the better of the two is named: the hook as the final decision
+    reads it, ending where it does (not in the uppercut)."""
+    _, truth, replayed = _in_order(tmp_path, 3, [("hook_left", 3), ("uppercut_left", 4), ("right_left_right_combo", 3)])
+    hook = [f for f in replayed.found if f.action == "hook_left" and f.start < truth[0][2]]
+    shown = [p for p in replayed.provisional if p.action == "hook_left" and p.start < truth[0][2]]
+    assert len(hook) == 1 and shown and (shown[0].start, shown[0].end) == (hook[0].start, hook[0].end)
+
+
 def test_gestures_learned_with_both_hands_are_named_on_both_tracks(tmp_path):
     """Two-handed gestures (learned from c0 and c1 together) streamed with pauses between:
     finals equal the batch, and the second hand's track shows the two-handed action
