@@ -8,8 +8,7 @@ tokens past what the Matcher has settled, one at a time, and scores, at every to
 the windows ending there. A window starts at the spotter's anchor — where the last gesture it
 named ended, a pause ended, or :data:`~grammar.refiner.TRIM` tokens before what the Matcher
 settled ends (what the Refiner may give up at a segment's end, the next gesture may begin
-with): back to back, where the next gesture begins — or up to TRIM tokens after it (what the
-Refiner's windows may give up at their start); it holds at least :data:`~grammar.refiner.SPOT_TOKENS`
+with) — or anywhere after it; it holds at least :data:`~grammar.refiner.SPOT_TOKENS`
 tokens and no pause, and is the learned action it is nearest by the Refiner's own rule
 (``edits + WEIGHT × shape distance``, within the action's examples' durations:
 :meth:`Refiner.nearest`) — here only when its shape distance is within :data:`SURE` of the
@@ -23,7 +22,16 @@ fits best there and what follows is another motion. (LAG too was chosen by
 leave-one-user-out on those streams: per user, among 1–3, the value whose names on the other
 four users come within 0.3 s of a gesture's end, the median and 90 % of them, naming the
 final action most often — 1 in every fold; 3 would name it 2 % more often, 90 % within
-0.6–0.7 s.) The anchor then moves to its end. This
+0.6–0.7 s.) The anchor then moves to its end; and while a window from the spotted one's
+start to a later boundary scores better for its action, the gesture was going on: the spot
+reaches there and so does the anchor (a spot ended early by a passing dip in the score). Of
+windows starting at the anchor or within TRIM tokens of it alone, a gesture ended early left
+its tail before the next one's start, and no window could begin there until every action's
+longest example had passed: by leave-one-user-out on those streams (per user, on the other
+four: the variants whose names come within 0.3 s, the median and 90 %, naming the final
+action most often, differences within a standard error counted as ties, broken by the
+quicker), windows starting anywhere and spots that go on were chosen in 4 of 5 folds (one
+chose starting anywhere alone). This
 is continuous segmentation by a score read as the stream goes on, in the spirit of Machete
 (Taranta, Pittman, Maghoumi, Maslych, Moolenaar & LaViola 2021, "Machete: easy, efficient,
 and precise continuous custom gesture segmentation", ACM TOCHI 28(1)). A pause ends every
@@ -62,6 +70,7 @@ class Spotter:
         self._states: dict[int, np.ndarray] = {}  # window start -> automaton costs of its tokens so far
         self._scores: dict[int, tuple | None] = {}  # window end -> (score, first, stop, action, edits) or None
         self.spotted: list[tuple] = []  # (first, stop, action, edits) from final tokens, in order
+        self._going: list | None = None  # the last spot while it may go on: [first, action, score, automaton costs]
 
     def spots(self, refiner: Refiner, final: int, floor: int) -> list[tuple]:
         """The windows spotted from token ``floor`` − :data:`~grammar.refiner.TRIM` on
@@ -112,6 +121,8 @@ class Spotter:
         if keep:
             self._n = k + 1
         if token.name == "T_STILL":  # a pause ends every window (one held back is the gesture: it stops there)
+            if keep:
+                self._going = None
             held = scores.pop(HELD, None)
             spot = held[1] if held is not None and held[1][0] >= anchor else None
             if keep and spot is not None:
@@ -122,6 +133,10 @@ class Spotter:
                 self._move(k + 1)
             return spot
         code = CODES[token.name]
+        if keep:
+            self._go_on(refiner, k, code)
+            states, scores = self._states, self._scores
+            anchor = self.anchor
         for f in list(states):
             if k + 1 - f > SPOT_MAX:
                 del states[f]
@@ -147,6 +162,8 @@ class Spotter:
                 scores[HELD] = (c, spot, longer, best[0])
             return None
         scores.pop(HELD, None)
+        if keep:
+            self._going = [spot[0], spot[2], best[0], states[spot[0]].copy()]
         return self._spot(spot, c, keep)
 
     def _spot(self, spot: tuple, c: int, keep: bool) -> tuple:
@@ -154,6 +171,30 @@ class Spotter:
             self.spotted.append(spot)
             self._move(c)
         return spot
+
+    def _go_on(self, refiner: Refiner, k: int, code: int) -> None:
+        """Token ``k`` (of automaton ``code``, final) read into the last spot while it may go
+        on: if the window from its start through ``k`` scores better for its action than the
+        spot did, the spot reaches there, and so does the anchor. It stops going on once that
+        window holds a pause, or lasts longer than the action may, or more than
+        :data:`~grammar.refiner.SPOT_MAX` tokens."""
+        going = self._going
+        if going is None:
+            return
+        f, a = going[0], going[1]
+        auto = refiner.shapes.automaton
+        going[3] = auto.step(going[3], code)
+        e = k + 1
+        if (e - f > SPOT_MAX or not self.spotted or self.spotted[-1][0] != f or not refiner.readable(f, e)
+                or not Spotter._could_go_on(refiner, f, e)[a]):
+            self._going = None
+            return
+        edits = auto.accept_costs(going[3])[None]
+        _, score = refiner.nearest([(f, e)], edits, SURE)
+        if score[0, a] < going[2]:
+            going[2] = float(score[0, a])
+            self.spotted[-1] = (f, e, a, float(edits[0, a]))
+            self._move(e)
 
     @staticmethod
     def _longer(refiner: Refiner, spot: tuple) -> int | None:
@@ -204,22 +245,9 @@ class Spotter:
         return float(t[min(tokens[e - 1].end, len(t)) - 1] - t[tokens[f].start])
 
     @staticmethod
-    def _lost(refiner: Refiner, anchor: int, e: int) -> bool:
-        """Whether no gesture can start at the anchor any more: a window from :data:`TRIM`
-        tokens after it to boundary ``e`` lasts longer than :data:`~grammar.refiner.TEMPO` × the
-        longest example of every action (a gesture no spot named lies between) — or the
-        examples' durations are not known. Windows then start anywhere after the anchor."""
-        longest = refiner.shapes.longest
-        if refiner.t is None or longest is None or not np.isfinite(np.max(longest)):
-            return True
-        return Spotter._seconds(refiner, min(anchor + TRIM, e - 1), e) > TEMPO * float(np.max(longest))
-
-    @staticmethod
     def _best(refiner: Refiner, states: dict, e: int, anchor: int):
         """The best window ending at token boundary ``e`` (of the starts in ``states``), or None."""
-        lost = Spotter._lost(refiner, anchor, e)
-        windows = [(f, e) for f in sorted(states) if f >= anchor and e - f >= SPOT_TOKENS and (lost or f <= anchor + TRIM)
-                   and refiner.readable(f, e)]
+        windows = [(f, e) for f in sorted(states) if f >= anchor and e - f >= SPOT_TOKENS and refiner.readable(f, e)]
         windows = [w for w, fits in zip(windows, refiner.lasts(windows).any(axis=1)) if fits] if windows else []
         if not windows:  # (none lasts about as long as some action's examples)
             return None

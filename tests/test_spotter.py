@@ -1,12 +1,11 @@
-"""The Spotter's anchor (grammar.spotter): windows start where the next gesture begins —
-at the anchor or a few tokens after it — until no gesture can start there any more."""
+"""The Spotter (grammar.spotter): its windows start anywhere from the anchor; a spot goes on
+while a longer window from its start scores better; a window held back is spotted at a pause."""
 
 from types import SimpleNamespace
 
 import numpy as np
 
 from doodle.core.tokens import Token
-from grammar.refiner import TEMPO, TRIM
 from grammar.spotter import HELD, Spotter
 
 
@@ -18,18 +17,29 @@ def _refiner(longest, seconds=10.0, tokens=20, rate=90.0):
                            t=t, tokens=toks)
 
 
-def test_the_anchor_is_lost_once_every_window_from_it_lasts_longer_than_any_action_may():
-    refiner = _refiner([1.0, 2.0])  # tokens of 0.5 s each
-    limit = TEMPO * 2.0
-    for e in range(TRIM + 2, 21):
-        span = refiner.t[refiner.tokens[e - 1].end - 1] - refiner.t[refiner.tokens[TRIM].start]
-        assert Spotter._lost(refiner, 0, e) == (span > limit)
-    assert not Spotter._lost(refiner, 0, TRIM + 2) and Spotter._lost(refiner, 0, 20)
+def test_a_spot_goes_on_while_a_longer_window_from_its_start_scores_better():
+    """Spotted at boundary 5 (score 10), the window from its start scores 12 to boundary 6,
+    8 to 7, 9 to 8: the gesture was going on to 7 — the spot and the anchor reach there, and
+    no further; past SPOT_MAX tokens it no longer goes on."""
+    from grammar.refiner import SPOT_MAX
 
-
-def test_without_the_examples_durations_windows_start_anywhere():
-    assert Spotter._lost(_refiner(None), 0, 6)
-    assert Spotter._lost(_refiner([np.inf, 2.0]), 0, 6)
+    refiner = _refiner(None, tokens=SPOT_MAX + 10)
+    refiner.t, refiner.shapes.names = None, ("a", "b")
+    table = {6: 12.0, 7: 8.0, 8: 9.0}
+    refiner.shapes.automaton = SimpleNamespace(step=lambda state, code: state + 1,
+                                               accept_costs=lambda state: np.array([1.0, 2.0]))
+    refiner.readable = lambda f, e: True
+    refiner.nearest = lambda windows, edits, strict: (None, np.array([[table.get(windows[0][1], 20.0), np.inf]]))
+    spotter = Spotter()
+    spotter.spotted, spotter.anchor = [(0, 5, 0, 1.0)], 5
+    spotter._going = [0, 0, 10.0, 0]
+    for k in range(5, 9):
+        spotter._go_on(refiner, k, 0)
+    assert spotter.spotted == [(0, 7, 0, 1.0)] and spotter.anchor == 7 and spotter._going[2] == 8.0
+    table[SPOT_MAX + 2] = 1.0
+    for k in range(9, SPOT_MAX + 2):
+        spotter._go_on(refiner, k, 0)
+    assert spotter._going is None and spotter.spotted == [(0, 7, 0, 1.0)]
 
 
 def test_a_window_held_back_is_spotted_at_the_pause_that_ends_its_motion():
