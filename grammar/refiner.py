@@ -29,6 +29,7 @@ UNKNOWN_REACH = 8  # tokens it may take from a neighbouring unknown run
 SPOT_TOKENS, SPOT_MAX = 4, 40  # unknown runs of this many tokens are searched for a learned action…
 SPOT = 1.0  # …found when its shape distance is under this part of the action's rejection distance
 SEEN = 20000  # windows whose shape distances a Refiner keeps (beyond: the oldest half forgotten)
+SURE = 0.4  # a window fits an action closely within this part of its rejection distance (chosen for the Spotter: grammar.spotter)
 TEMPO = 1.5  # a window is not an action when it lasts over this × its longest example or under its shortest / this
 
 
@@ -280,7 +281,8 @@ class Refiner:
         whose shape fits the whole motion also reads its tokens with no more edits than the
         built-in one does: then the tokens do not prefer the built-in action, and the shape
         is the user's (an uppercut read as Stop at two edits, which the uppercut's own
-        expression reads at two as well) — or the learned action is two-handed, its shape fits
+        expression reads at two as well), or at one edit more when its shape fits closely
+        (:meth:`_close`: a hook read as Crescent Kick at two edits, three for the hook) — or the learned action is two-handed, its shape fits
         both hands, and the other hand's Matcher read its movement over that window as no
         action at all (not even a built-in one): the built-in reading leaves that hand
         unexplained, the two-handed action explains both. A motion that no learned action fits whole — no
@@ -297,8 +299,9 @@ class Refiner:
         moving = [i for i in range(first, seg.stop) if self.tokens[i].name != "T_STILL"]
         if (moving[0], moving[-1] + 1) == (a, b):  # read whole as this action: it stays, unless …
             whole = self._best([a], [(b, b)], known, motion=motion, across=False) if seg.distance is not None else None
-            if whole is None or (whole[3] > seg.distance and not self._partner_unread(whole)):  # … a learned
-                return []  # one reads it as well, or a two-handed one fits hands the Matchers read as nothing
+            if whole is None or (whole[3] > seg.distance and not self._close(whole, seg)
+                                 and not self._partner_unread(whole)):  # … a learned one reads it as well (or at one
+                return []  # edit more, closely), or a two-handed one fits hands the Matchers read as nothing
         else:
             whole = self._best(range(a, min(b, a + TRIM + 1)), [(max(a + 1, b - TRIM), b)], known, motion=motion,
                                across=False)
@@ -306,6 +309,19 @@ class Refiner:
                 return self._among_pieces(seg, first, known)
         two = self._two(motion, known)  # or two learned gestures back to back, as a shaped segment's motion may be
         return list(two) if two is not None else [whole]
+
+    def _close(self, window, seg) -> bool:
+        """Whether a learned action's ``window`` over a motion read whole as the built-in
+        segment ``seg`` reads its tokens with at most one edit more and its shape fits within
+        :data:`SURE` of its rejection distance — as closely as the Spotter needs to name a
+        gesture with nothing else to go on. The built-in actions' expressions are a few
+        tokens long and a new performance is 5 to 10 edits from a learned action's
+        examples: one edit is no evidence against the shape the user taught; a loose
+        fit (a gesture that hardly moves this hand) is not enough."""
+        if window[3] > seg.distance + 1:
+            return False
+        f, e, k, _ = window
+        return bool(self.distances([(f, e)])[0, k] <= SURE * self.shapes.reject[k])
 
     def _two_handed_over(self, seg, motion) -> bool:
         """Whether what the other hands' Matchers read decides a built-in segment (of

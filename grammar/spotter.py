@@ -11,7 +11,7 @@ settled ends (what the Refiner may give up at a segment's end, the next gesture 
 with) — or anywhere after it; it holds at least :data:`~grammar.refiner.SPOT_TOKENS`
 tokens and no pause, and is the learned action it is nearest by the Refiner's own rule
 (``edits + WEIGHT × shape distance``, within the action's examples' durations:
-:meth:`Refiner.nearest`) — here only when its shape distance is within :data:`SURE` of the
+:meth:`Refiner.nearest`) — here only when its shape distance is within :data:`~grammar.refiner.SURE` of the
 action's rejection distance, not the whole of it: a gesture's first part fits a shorter
 gesture loosely, a whole gesture its own closely. (SURE was chosen by leave-one-user-out on
 the real users' held-out takes streamed back to back: per user, the value among 0.3–1.0 whose
@@ -52,10 +52,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from grammar.refiner import SPOT_MAX, SPOT_TOKENS, TEMPO, TRIM, Refiner
+from grammar.refiner import SPOT_MAX, SPOT_TOKENS, SURE, TEMPO, TRIM, Refiner
 
 LAG = 1  # token boundaries after a window that must score worse before it is spotted
-SURE = 0.4  # a window is spotted only when its shape distance is within this part of its action's rejection distance
 BEGINNING = (1 / 3, 0.8)  # how much of a longer action's examples a window is compared against as their beginning
 HELD = -1  # where a scores dict keeps a window held back: (its end, the window, the longer action it may begin, its score)
 
@@ -200,7 +199,7 @@ class Spotter:
     def _longer(refiner: Refiner, spot: tuple) -> int | None:
         """The action a spot's window may be the beginning of, or None: another action, one
         that could still be going on (:meth:`_begins`), whose examples' beginnings
-        (:data:`BEGINNING`, open-end DTW) the window fits within :data:`SURE` of its
+        (:data:`BEGINNING`, open-end DTW) the window fits within :data:`~grammar.refiner.SURE` of its
         rejection distance and closer, for that distance, than the spot's action whole. A
         gesture's first part can fit a shorter gesture whole (a combo's first two punches a
         hook): it is held back while the motion goes on as the longer one's beginning."""
@@ -224,7 +223,7 @@ class Spotter:
         """(actions,): which of the actions ``among`` window f..e may be the beginning of, or
         the whole of: it lasts less than :data:`~grammar.refiner.TEMPO` × the action's longest
         example, and fits its examples' beginnings (from :data:`BEGINNING`'s first part to all
-        of them) within :data:`SURE` of its rejection distance (no DTW when none could last)."""
+        of them) within :data:`~grammar.refiner.SURE` of its rejection distance (no DTW when none could last)."""
         could = among & Spotter._could_go_on(refiner, f, e)
         if not could.any():
             return could

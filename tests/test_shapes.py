@@ -363,6 +363,27 @@ def test_a_motion_read_whole_as_a_built_in_action_is_the_learned_one_that_reads_
     assert named == ["uppercut_right"]
 
 
+@pytest.mark.parametrize("name, gesture, take, trained", [("Sub_U001", "hook_left", 2, (0, 1, 4)),
+                                                           ("Sub_U002", "uppercut_right", 0, (1, 2, 4))])
+def test_a_motion_read_whole_as_a_built_in_action_is_the_learned_one_that_fits_it_closely(tmp_path, name, gesture,
+                                                                                         take, trained):
+    """Sub_U001's left hook read whole as Crescent Kick, Sub_U002's right uppercut as Flip,
+    two edits from the built-in expression and three from the learned one's — whose shape
+    fits the motion within SURE of its rejection distance: at one edit more, a shape that
+    close is the user's (they were the built-in actions)."""
+    from bench.learning_protocol import load as load_vive, make_library
+    from grammar.recognizer import load_actions, recognize
+
+    if not VIVE.is_dir():
+        pytest.skip("real Vive recordings not found")
+    user = load_vive(VIVE)[name]
+    lib = make_library(tmp_path / "mine", {g: [user[g][i] for i in trained] for g in sorted(user)}, ("c0",))
+    compiled = load_actions(lib, True)
+    named = [s.action for s in recognize(user[gesture][take].select(["c0"]), compiled)["c0"][1]
+             if s.action not in ("unknown", "Idle")]
+    assert named == [gesture]
+
+
 def test_two_learned_gestures_among_built_in_pieces(tmp_path):
     """Sub_U004's fly_eagle, left_right_left_combo, hook_left, right_left_right_combo and
     cartwheel_left back to back with both hands, the built-in actions beside the learned
