@@ -98,6 +98,19 @@ def test_file_holds_the_source_samples(tmp_path, automaton):
     assert found[0]["gap"] == pytest.approx(0.2, abs=0.03)
 
 
+def test_what_is_loaded_before_recording_is_left_out_of_garbage_collection(tmp_path, automaton):
+    """A full collection scans every object the process holds (the library, the modules):
+    tens of milliseconds in which no thread runs and the source is not polled. While
+    recording, what was loaded before is frozen out of collection; afterwards it is not."""
+    import gc
+
+    during, fake = [], FakeClock()
+    record(SyntheticSource(two_tracks()), tmp_path / "take.doodle", clock=fake.clock, sleep=fake.sleep,
+           compiled=automaton,
+           on_event=lambda kind, payload: during.append(gc.get_freeze_count()) if kind == "started" else None)
+    assert during and during[0] > 1000 and gc.get_freeze_count() == 0
+
+
 def test_replay_source_rerecords_a_file(tmp_path, automaton):
     first, second = tmp_path / "a.doodle", tmp_path / "b.doodle"
     run(SyntheticSource(two_tracks()), first, automaton)

@@ -34,6 +34,7 @@ Times in events and results are seconds from the first recorded frame, as in the
 
 from __future__ import annotations
 
+import gc
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -231,7 +232,8 @@ def record(source, path, *, clock=time.monotonic, sleep=time.sleep, wait_for_tri
     # ready before the first frame (compiling its automata takes a tenth of a second or so)
     live = _Behind(_Live(compiled if recognise else None, names, rate, params,
                          [(mounts or {}).get(n, mount) for n in names], emit))
-    try:
+    gc.freeze()  # what is loaded by now (modules, the library) is never scanned again: a full collection of it
+    try:  # stalls every thread for tens of milliseconds, and the source would not be polled meanwhile
         try:
             tick = clock()
             while True:
@@ -267,6 +269,7 @@ def record(source, path, *, clock=time.monotonic, sleep=time.sleep, wait_for_tri
         result = live.close() if len(times) >= 2 else {}
     finally:
         live.finish()  # nothing left running, whatever ended the recording
+        gc.unfreeze()
         if writer is not None:
             writer.close()
     emit("stopped", {"t": times[-1] if times else 0.0, "reason": reason, "samples": len(times)})
