@@ -282,10 +282,11 @@ class Refiner:
         built-in one does: then the tokens do not prefer the built-in action, and the shape
         is the user's (an uppercut read as Stop at two edits, which the uppercut's own
         expression reads at two as well), or at one edit more when its shape fits closely
-        (:meth:`_close`: a hook read as Crescent Kick at two edits, three for the hook) — or the learned action is two-handed, its shape fits
-        both hands, and the other hand's Matcher read its movement over that window as no
-        action at all (not even a built-in one): the built-in reading leaves that hand
-        unexplained, the two-handed action explains both. A motion that no learned action fits whole — no
+        (:meth:`_close`: a hook read as Crescent Kick at two edits, three for the hook) — or
+        the learned action is two-handed, its shape fits both hands, and the other hand's
+        Matcher read its movement over that window as no action at all (not even a built-in
+        one): the built-in reading leaves that hand unexplained, the two-handed action
+        explains both. A motion that no learned action fits whole — no
         pause bounds it (back to back), or it holds more than one gesture — is searched
         around the segment instead (:meth:`_among_pieces`)."""
         if not self._moving(seg):

@@ -232,8 +232,10 @@ def record(source, path, *, clock=time.monotonic, sleep=time.sleep, wait_for_tri
     # ready before the first frame (compiling its automata takes a tenth of a second or so)
     live = _Behind(_Live(compiled if recognise else None, names, rate, params,
                          [(mounts or {}).get(n, mount) for n in names], emit))
-    gc.freeze()  # what is loaded by now (modules, the library) is never scanned again: a full collection of it
-    try:  # stalls every thread for tens of milliseconds, and the source would not be polled meanwhile
+    # What is loaded by now (modules, the library) is never scanned again while recording: a full
+    # collection of it stalls every thread for tens of milliseconds, and the source is not polled meanwhile.
+    gc.freeze()
+    try:
         try:
             tick = clock()
             while True:
