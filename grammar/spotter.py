@@ -92,15 +92,19 @@ class Spotter:
 
     def begins_pair(self, refiner: Refiner) -> bool:
         """Whether the tokens of ``refiner`` (bound as for :meth:`spots`) from the anchor on,
-        or from up to :data:`~grammar.refiner.TRIM` after it, may be a two-handed action
-        under way: they fit the beginning of one's examples, or all of them (:meth:`_begins`)."""
+        or from anywhere after it (as a window may start), may be a two-handed action under
+        way: they fit the beginning of one's examples, or all of them (:meth:`_begins`).
+        (From anywhere, not only the anchor or a few tokens after it: on the streams the
+        Spotter's constants were chosen on, with both hands learned, the second hand's own
+        reading was shown under a two-handed gesture less often for every held-out user, the
+        names as soon — leave-one-user-out.)"""
         pairs = refiner.shapes.partners
         e = len(refiner.tokens)
         if not pairs or e - self.anchor < SPOT_TOKENS:
             return False
         two = np.array([bool(others) for others in pairs]) & refiner.allowed
         return any(Spotter._may_begin(refiner, f, e, two).any()
-                   for f in range(self.anchor, min(self.anchor + TRIM, e - SPOT_TOKENS) + 1)
+                   for f in range(max(self.anchor, e - SPOT_MAX), e - SPOT_TOKENS + 1)
                    if refiner.readable(f, e) and all(k.name != "T_STILL" for k in refiner.tokens[f:e]))
 
     def _move(self, anchor: int) -> None:

@@ -346,6 +346,30 @@ def test_gestures_after_one_spotted_before_its_end_are_named_as_they_end(tmp_pat
         assert len(final) == 1 and shown and shown[0].at <= b + 0.3, g
 
 
+def test_the_second_hand_waits_while_a_two_handed_gesture_may_be_under_way_back_to_back(tmp_path):
+    """Sub_U002's gestures learned with both hands, four performed back to back: the fly_eagle
+    begins more than a few tokens past the first hand's anchor. The second hand's own reading
+    waits while the first hand's motion from anywhere past the anchor may be a two-handed
+    action under way, and none is shown over the fly_eagle (from the anchor or a few tokens
+    after it only, Dodge was, just before the fly_eagle)."""
+    from bench.learning_protocol import stream
+
+    data, user, classes, compiled = _learned(tmp_path, 1, ("c0", "c1"))
+    takes = [("uppercut_left", 3), ("hook_right", 4), ("fly_eagle", 4), ("uppercut_right", 4)]
+    doodle, truth = stream([(g, data[user][g][j].select(["c0", "c1"])) for g, j in takes], _InOrder(), idle=False)
+    replayed = replay(doodle, compiled)
+    batch = recognize(doodle, compiled)
+    for name in doodle.names:  # (the two-handed actions' roles included)
+        t = doodle.track(name).t
+        assert sorted((r.start, r.action) for r in replayed.found if r.track == name) == \
+            sorted((float(t[s.start]), s.action) for s in batch[name][1] if s.action != "unknown")
+    assert [f.action for f in replayed.found if f.track == "c1" and f.action == "fly_eagle"] == ["fly_eagle"]
+    shown = [p for p in replayed.provisional if p.track == "c1" and p.action == "fly_eagle"]
+    under = [p for p in replayed.provisional if p.track == "c1" and p.action not in classes
+             and p.start < shown[0].end and shown[0].start < p.end]
+    assert shown and not under
+
+
 def test_gestures_learned_with_both_hands_are_named_on_both_tracks(tmp_path):
     """Two-handed gestures (learned from c0 and c1 together) streamed with pauses between:
     finals equal the batch, and the second hand's track shows the two-handed action
