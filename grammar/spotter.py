@@ -69,7 +69,7 @@ class Spotter:
         self._states: dict[int, np.ndarray] = {}  # window start -> automaton costs of its tokens so far
         self._scores: dict[int, tuple | None] = {}  # window end -> (score, first, stop, action, edits) or None
         self.spotted: list[tuple] = []  # (first, stop, action, edits) from final tokens, in order
-        self._going: list | None = None  # the last spot while it may go on: [first, action, score, automaton costs]
+        self._going: list | None = None  # while the last spot may go on: [its score, its start's automaton costs]
 
     def spots(self, refiner: Refiner, final: int, floor: int) -> list[tuple]:
         """The windows spotted from token ``floor`` − :data:`~grammar.refiner.TRIM` on
@@ -165,13 +165,17 @@ class Spotter:
                 scores[HELD] = (c, spot, longer, best[0])
             return None
         scores.pop(HELD, None)
-        if keep:
-            self._going = [spot[0], spot[2], best[0], states[spot[0]].copy()]
-        return self._spot(spot, c, keep)
+        if not keep:
+            return spot
+        going = [best[0], states[spot[0]].copy()]  # (before the anchor moves past its start)
+        self._spot(spot, c, keep)
+        self._going = going
+        return spot
 
     def _spot(self, spot: tuple, c: int, keep: bool) -> tuple:
         if keep:
             self.spotted.append(spot)
+            self._going = None  # (only a spot made at a turn of the score goes on: :meth:`_read` sets it)
             self._move(c)
         return spot
 
@@ -182,20 +186,20 @@ class Spotter:
         window holds a pause, or lasts longer than the action may, or more than
         :data:`~grammar.refiner.SPOT_MAX` tokens."""
         going = self._going
-        if going is None:
-            return
-        f, a = going[0], going[1]
-        auto = refiner.shapes.automaton
-        going[3] = auto.step(going[3], code)
-        e = k + 1
-        if (e - f > SPOT_MAX or not self.spotted or self.spotted[-1][0] != f or not refiner.readable(f, e)
-                or not Spotter._could_go_on(refiner, f, e)[a]):
+        if going is None or not self.spotted:  # (what the Matcher settled may have passed it)
             self._going = None
             return
-        edits = auto.accept_costs(going[3])[None]
+        f, _, a, _ = self.spotted[-1]
+        auto = refiner.shapes.automaton
+        going[1] = auto.step(going[1], code)
+        e = k + 1
+        if e - f > SPOT_MAX or not refiner.readable(f, e) or not Spotter._could_go_on(refiner, f, e)[a]:
+            self._going = None
+            return
+        edits = auto.accept_costs(going[1])[None]
         _, score = refiner.nearest([(f, e)], edits, SURE)
-        if score[0, a] < going[2]:
-            going[2] = float(score[0, a])
+        if score[0, a] < going[0]:
+            going[0] = float(score[0, a])
             self.spotted[-1] = (f, e, a, float(edits[0, a]))
             self._move(e)
 

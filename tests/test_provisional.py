@@ -40,6 +40,15 @@ def finals_equal_batch(doodle, replayed, compiled):
         {n: [(k.name, k.start) for k in tokens] for n, (tokens, _) in batch.items()}
 
 
+def finals_equal_batch_on_every_track(doodle, replayed, compiled):
+    """As :func:`finals_equal_batch`, the two-handed actions' roles included (on every track)."""
+    batch = recognize(doodle, compiled)
+    for name in doodle.names:
+        t = doodle.track(name).t
+        assert sorted((r.start, r.action) for r in replayed.found if r.track == name) == \
+            sorted((float(t[s.start]), s.action) for s in batch[name][1] if s.action != "unknown")
+
+
 def test_held_is_what_closing_would_give_and_leaves_the_segmenter_as_it_was():
     """At every frame, the tokens held back as they stand are those closing a copy of the
     Segmenter would give (the samples still being smoothed read as at the end of a file),
@@ -356,13 +365,9 @@ def test_the_second_hand_waits_while_a_two_handed_gesture_may_be_under_way_back_
 
     data, user, classes, compiled = _learned(tmp_path, 1, ("c0", "c1"))
     takes = [("uppercut_left", 3), ("hook_right", 4), ("fly_eagle", 4), ("uppercut_right", 4)]
-    doodle, truth = stream([(g, data[user][g][j].select(["c0", "c1"])) for g, j in takes], _InOrder(), idle=False)
+    doodle, _ = stream([(g, data[user][g][j].select(["c0", "c1"])) for g, j in takes], _InOrder(), idle=False)
     replayed = replay(doodle, compiled)
-    batch = recognize(doodle, compiled)
-    for name in doodle.names:  # (the two-handed actions' roles included)
-        t = doodle.track(name).t
-        assert sorted((r.start, r.action) for r in replayed.found if r.track == name) == \
-            sorted((float(t[s.start]), s.action) for s in batch[name][1] if s.action != "unknown")
+    finals_equal_batch_on_every_track(doodle, replayed, compiled)
     assert [f.action for f in replayed.found if f.track == "c1" and f.action == "fly_eagle"] == ["fly_eagle"]
     shown = [p for p in replayed.provisional if p.track == "c1" and p.action == "fly_eagle"]
     under = [p for p in replayed.provisional if p.track == "c1" and p.action not in classes
@@ -382,11 +387,7 @@ def test_gestures_learned_with_both_hands_are_named_on_both_tracks(tmp_path):
     doodle, _ = stream([(g, d.select(["c0", "c1"])) for g in classes for d in data[user][g][3:4]],
                        np.random.default_rng(1), idle=True)
     replayed = replay(doodle, compiled)
-    batch = recognize(doodle, compiled)
-    for name in doodle.names:  # (the two-handed actions' roles included)
-        t = doodle.track(name).t
-        assert sorted((r.start, r.action) for r in replayed.found if r.track == name) == \
-            sorted((float(t[s.start]), s.action) for s in batch[name][1] if s.action != "unknown")
+    finals_equal_batch_on_every_track(doodle, replayed, compiled)
     pairs = [f for f in replayed.found if f.track == "c1" and f.action in classes]
     assert len(pairs) >= len(classes) // 2
     for f in pairs:

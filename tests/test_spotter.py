@@ -32,10 +32,10 @@ def test_a_spot_goes_on_while_a_longer_window_from_its_start_scores_better():
     refiner.nearest = lambda windows, edits, strict: (None, np.array([[table.get(windows[0][1], 20.0), np.inf]]))
     spotter = Spotter()
     spotter.spotted, spotter.anchor = [(0, 5, 0, 1.0)], 5
-    spotter._going = [0, 0, 10.0, 0]
+    spotter._going = [10.0, 0]
     for k in range(5, 9):
         spotter._go_on(refiner, k, 0)
-    assert spotter.spotted == [(0, 7, 0, 1.0)] and spotter.anchor == 7 and spotter._going[2] == 8.0
+    assert spotter.spotted == [(0, 7, 0, 1.0)] and spotter.anchor == 7 and spotter._going[0] == 8.0
     table[SPOT_MAX + 2] = 1.0
     for k in range(9, SPOT_MAX + 2):
         spotter._go_on(refiner, k, 0)
