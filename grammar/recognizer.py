@@ -367,6 +367,9 @@ class _Chain:
         if spotted:  # one reading per motion: what is decided as if the stream ended gives way to what is spotted
             f = spotted[0].first
             refined = [r if r.stop <= f else replace(r, stop=f, end=refiner.tokens[f - 1].end) for r in refined if r.first < f]
+        if self.segmenter.held_hold:  # a still read as a pause that may yet be a hold is not named a pause yet
+            refined = [r for r in refined if r.stop < len(refiner.tokens)
+                       or any(k.name != "T_STILL" for k in refiner.tokens[r.first:r.stop])]
         return refined + spotted
 
     def pair_begun(self) -> bool:

@@ -107,16 +107,18 @@ class Absorber:
             return True
         return still.end - still.start - SLOWING * (before + after) < self.rest
 
-    def pause_from(self, still: Token) -> float:
-        """The sample from which a still in progress (not pushed yet) would be a pause were a
-        movement to begin there — the earliest it can be known to be one: the next
-        movement's slowing start, unknown yet, only makes a hold likelier."""
+    def pause_from(self, still: Token) -> tuple[float, float]:
+        """The samples from which a still in progress (not pushed yet) would be a pause were a
+        movement to begin there: the earliest it can be known to be one — the next
+        movement's slowing start, unknown yet, only makes a hold likelier — and from which it
+        is one however the next movement starts (:data:`HOLD_CAP` × ``pause_s``)."""
         before = len(self._raw) - 1  # the movement before it
         if self._joins(still):
             still, before = Token(STILL, self._raw[-2][0].start, still.end), before - 2
         if self.pause <= 0 or still.start == 0 or before < 0:
-            return still.start
-        return still.start + min(self.longest_hold, max(self.pause, self.rest + SLOWING * self._raw[before][2][1]))
+            return still.start, still.start
+        may = still.start + min(self.longest_hold, max(self.pause, self.rest + SLOWING * self._raw[before][2][1]))
+        return may, still.start + self.longest_hold
 
     def copy(self) -> "Absorber":
         """An independent copy (what it is pushed leaves this one as it is)."""

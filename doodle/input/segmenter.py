@@ -280,7 +280,10 @@ class Segmenter:
         self._fast2 = 4.0 * params.eps * params.eps
         self._tok_fast = self._run_fast = None  # (first, last) sample over 2ε: token before the run, the run
         self._since: list = []  # runs shorter than α since the last confirmed one (corner candidates)
-        self._pause: tuple | None = None  # (start, samples classified from which it may be a pause) of the still :meth:`held` last read
+        # of the still :meth:`held` last read: (start, samples classified from which it may be a
+        # pause, ... from which it is one whatever follows)
+        self._pause: tuple | None = None
+        self.held_hold = False  # whether the still :meth:`held` last gave as a pause may yet be a hold
         self._recent: deque = deque(maxlen=self.alpha + 1)  # the latest samples pushed, raw (:meth:`_slowing`)
 
     @property
@@ -349,15 +352,19 @@ class Segmenter:
         without waiting for the smoothing kernel's half-width. A still in progress is left
         out while it could not be a pause yet — were a movement to begin now, by the
         Absorber's rule (:meth:`Absorber.pause_from`): it may be a hold, the movement before
-        it going on."""
+        it going on. :attr:`held_hold` says whether one given may still turn out a hold
+        (the next movement starting slowly), not being a pause whatever follows yet."""
         peek, out = self._fork(), []
         for row in peek._smoother.close():
             peek._classify(row, out)
+        self.held_hold = False
         if peek._cur == STILL:
-            pause = peek._absorber.pause_from(Token(NAMES[STILL], peek._cur_start, peek._n))
-            self._pause = (self._cur_start, pause - (peek._n - self._n))  # ... once this many samples are classified
-            if peek._n < pause:
+            may, sure = peek._absorber.pause_from(Token(NAMES[STILL], peek._cur_start, peek._n))
+            ahead = peek._n - self._n  # ... once this many samples are classified
+            self._pause = (self._cur_start, may - ahead, sure - ahead)
+            if peek._n < may:
                 return out + peek._absorber.close()
+            self.held_hold = peek._n < sure
         return out + peek.cut()
 
     def held_key(self) -> tuple:
@@ -373,7 +380,7 @@ class Segmenter:
         if self._cur == STILL:
             if self._pause is None or self._pause[0] != self._cur_start:
                 return self._cur, self._cur_start, self._n
-            return self._cur, self._cur_start, self._n >= self._pause[1]
+            return self._cur, self._cur_start, self._n >= self._pause[1], self._n >= self._pause[2]
         return (self._cur, self._cur_start,
                 extent(self._cur_row, self._last_row, self.params.theta) >= self._absorber.floor,
                 self._pushed if self._slowing() else None)
