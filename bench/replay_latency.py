@@ -103,6 +103,7 @@ def _real() -> None:
     data = load_vive()
     users = sorted(data)
     rng, lines, joined, order = np.random.default_rng(0), {False: [], True: []}, [], np.random.default_rng(1)
+    watched = []
     with tempfile.TemporaryDirectory() as tmp:
         for user in users:
             classes = sorted(data[user])
@@ -113,11 +114,14 @@ def _real() -> None:
                 into.append(latencies(doodle, replay(doodle, load_actions(folder, builtin))))
             doodle, _ = stream(pieces, order, idle=False)
             joined.append(latencies(doodle, replay(doodle, load_actions(folder, True))))
+            watched.append(at_real_time(doodle, load_actions(folder, True)))
     report(f"real recordings, {len(users)} users' held-out gestures streamed, each user's learned library (c0)",
            lines[False])
     report("the same, with the built-in actions beside the learned ones (`--library DIR`, the default)", lines[True])
     report("the same gestures back to back, no pause between (a gesture ends where the next begins), with the "
            "built-in actions: a learned segment waits for the pause that ends its motion, or 40 tokens", joined)
+    report("the same at real speed, on the clock a performer watches (the time recognition takes counted: "
+           "`doodle replay --speed 1`, RealTime)", watched)
     _two_performers(data)
     _recording_pace(data)
 
@@ -142,6 +146,38 @@ def _two_performers(data, users=("Sub_U001", "Sub_U007")) -> None:
                 lines.append(latencies(doodle, replay(doodle, compiled)))
     report(f"two performers of built-in actions, beside {' and '.join(u.replace('Sub_', '') for u in users)}'s "
            "gestures learned with both hands (c0+c1)", lines)
+
+
+class RealTime:
+    """A clock for :func:`doodle.app.replay.replay` at speed 1 without its waits: the time
+    the replay's own work took plus the sleeps it asked for. On it a replay falls behind
+    the performance, and catches up, exactly as at real speed, in a fraction of the time."""
+
+    def __init__(self):
+        self.slept, self.start = 0.0, None  # from the first reading (the replay's start) on
+
+    def __call__(self) -> float:
+        now = time.perf_counter()
+        self.start = now if self.start is None else self.start
+        return now - self.start + self.slept
+
+    def sleep(self, seconds: float) -> None:
+        self.slept += max(seconds, 0.0)
+
+
+def at_real_time(doodle, compiled):
+    """:func:`doodle.app.replay.latencies` with each name at the time it was shown on the
+    :class:`RealTime` clock of a replay at speed 1 (stream time plus how far recognition
+    had fallen behind), not at the frame's stream time."""
+    from dataclasses import replace
+
+    from doodle.app.replay import Replayed
+
+    clock, shown = RealTime(), {}
+    replayed = replay(doodle, compiled, speed=1.0, clock=clock, sleep=clock.sleep,
+                      on_action=lambda r: shown.setdefault(id(r), clock()))
+    seen = lambda rs: [replace(r, at=shown[id(r)]) for r in rs]  # noqa: E731
+    return latencies(doodle, Replayed(seen(replayed.found), replayed.costs, replayed.result, seen(replayed.provisional)))
 
 
 PACE_SECONDS = 15.0

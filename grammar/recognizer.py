@@ -474,8 +474,11 @@ class Live:
         token = chain.segmenter.pending
         return None if token is None else Token(token.name, token.start + chain.offset, token.end + chain.offset)
 
-    def push(self, t: float, poses) -> Step:
-        """One frame: a time and one ``(p, q, ok)`` per track, in the order of ``names``."""
+    def push(self, t: float, poses, labels: bool = True) -> Step:
+        """One frame: a time and one ``(p, q, ok)`` per track, in the order of ``names``.
+        ``labels`` False leaves the provisional actions to a later frame (one reading
+        behind the clock, with frames waiting: the first frame that works them out reads
+        all the tokens so far); what is decided is the same."""
         self.tape.append(t, poses)
         tokens, heard, restarted = {}, [], {}
         for name, (p, q, ok) in zip(self.names, poses):
@@ -498,7 +501,7 @@ class Live:
             heard += self._release()
         if self._laying:
             heard += self._lay()
-        return Step(tokens, heard, restarted, self._provisional_labels() if self.provisional else [])
+        return Step(tokens, heard, restarted, self._provisional_labels() if self.provisional and labels else [])
 
     def _provisional_labels(self) -> list[Heard]:
         """One track's provisional actions worked out afresh per frame, the tracks taking

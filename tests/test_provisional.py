@@ -144,6 +144,39 @@ def test_the_demo_is_named_provisionally_soon_after_each_gesture(compiled):
         assert first and first[0].at <= f.at
 
 
+class _Stalled:
+    """A replay's clock and sleep on which recognition stalls once, ``by`` seconds at ``at``:
+    the frames after it are processed behind the clock until the replay has caught up."""
+
+    def __init__(self, at: float, by: float):
+        self.now, self.at, self.by = 0.0, at, by
+
+    def __call__(self) -> float:
+        if self.at is not None and self.now >= self.at:
+            self.now, self.at = self.now + self.by, None
+        return self.now
+
+    def sleep(self, seconds: float) -> None:
+        self.now += seconds
+
+
+def test_a_replay_behind_the_clock_shows_labels_once_it_has_caught_up(compiled):
+    """At real speed, recognition fallen behind (a 0.5 s stall as the demo's second walk
+    ends) works out no provisional labels while the next frame is due already: the walk
+    and the pause after it, shown at 3.82 s when on time, are shown at the first frame on
+    time, by the same names; the finals still equal the batch."""
+    doodle = load(DEMO)
+    clock = _Stalled(3.6, 0.5)
+    stalled = replay(doodle, compiled, speed=1.0, clock=clock, sleep=clock.sleep)
+    finals_equal_batch(doodle, stalled, compiled)
+    flat = replay(doodle, compiled)
+    assert [(p.action, p.start) for p in stalled.provisional] == [(p.action, p.start) for p in flat.provisional]
+    frame = 1.0 / doodle.rate
+    on_time = [k for k, p in enumerate(flat.provisional) if 3.6 < p.at < 4.1]
+    assert [flat.provisional[k].action for k in on_time] == ["Walk", "Idle"]
+    assert all(4.1 - frame <= stalled.provisional[k].at <= 4.1 + frame for k in on_time)
+
+
 @pytest.mark.parametrize("k", range(0, 30, 3))
 def test_provisional_names_are_the_final_ones_in_most_cases_across_performers(compiled, k):
     """Across the performer grid (sizes, tempi, pauses, rates, tilt, wobble, jitter, bobbing,

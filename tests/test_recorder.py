@@ -162,7 +162,9 @@ def test_sleeps_until_each_tick(tmp_path, automaton):
 def test_slow_recognition_leaves_no_hole_in_a_live_recording(tmp_path, automaton, monkeypatch):
     """A live source gives only the pose of the moment (SteamVR): the recorder must poll it on
     every tick, however long recognising a frame takes (deciding a learned action can take a
-    few tenths of a second). Recognition stalls here for 0.3 s on one frame, on the real clock."""
+    few tenths of a second). Recognition stalls here for 0.3 s on one frame, on the real clock;
+    the frames that waited meanwhile are recognised without working out provisional labels,
+    but for the newest (catching up)."""
     from bench.replay_latency import OfTheMoment
     from grammar import recognizer
 
@@ -170,11 +172,11 @@ def test_slow_recognition_leaves_no_hole_in_a_live_recording(tmp_path, automaton
     slow, pushes = 0.3, []
     push = recognizer.Live.push
 
-    def stalling(self, t, poses):
-        pushes.append(t)
+    def stalling(self, t, poses, labels=True):
+        pushes.append((t, labels))
         if len(pushes) == 30:
             time.sleep(slow)
-        return push(self, t, poses)
+        return push(self, t, poses, labels)
 
     monkeypatch.setattr(recognizer.Live, "push", stalling)
 
@@ -182,6 +184,8 @@ def test_slow_recognition_leaves_no_hole_in_a_live_recording(tmp_path, automaton
     t = load(tmp_path / "live.doodle").t
     assert len(pushes) == result.samples == len(t)  # every frame recorded was recognised
     assert np.diff(t).max() < slow / 2  # polled on every tick meanwhile: no hole of the stall's length
+    waited = [k for k, (_, labels) in enumerate(pushes) if not labels]
+    assert waited and waited[0] == 30 and len(waited) >= 10 and pushes[-1][1]
 
 
 # --------------------------------------------------------------------------- live recognition

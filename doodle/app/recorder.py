@@ -80,7 +80,8 @@ class _Live:
         a = min(start, last)
         return self.times[a], self.times[min(max(end - 1, a), last)]
 
-    def push(self, t: float, poses) -> None:
+    def push(self, t: float, poses, labels: bool = True) -> None:
+        """One frame recognised (``labels``: :meth:`grammar.recognizer.Live.push`)."""
         self.times.append(t)
         mounted = []
         for name, mount, (p, q, ok) in zip(self.names, self.mounts, poses):
@@ -91,7 +92,7 @@ class _Live:
                 self.lost_at[name] = t
                 self.emit("lost", {"track": name, "t": t, "error": None})
             mounted.append((p, q, ok))
-        step = self.live.push(t, mounted)
+        step = self.live.push(t, mounted, labels)
         for name, why in step.restarted.items():  # back after a gap too long to bridge
             self.emit("lost", {"track": name, "t": t, "error": why})
         for name, (_, _, ok) in zip(self.names, mounted):
@@ -151,7 +152,9 @@ class _Behind:
     costs. A live source (SteamVR) gives only the pose of the moment: a frame not polled on
     its tick is a hole in the file, and deciding an action can take a few tenths of a second
     (a learned action's shape compared with the motion's, at a gesture's end). Recognition
-    may fall behind for as long; the events it emits come from its thread, in frame order.
+    may fall behind for as long — while frames wait, provisional actions are worked out
+    only at the newest, so that it catches up soon; the events it emits come from its
+    thread, in frame order.
     An exception in it stops the recording at the next frame (:meth:`push` raises it)."""
 
     def __init__(self, live: _Live):
@@ -165,8 +168,8 @@ class _Behind:
     def _run(self) -> None:
         while (frame := self.frames.get()) is not None:
             if self.error is None:
-                try:
-                    self.live.push(*frame)
+                try:  # behind, with frames waiting: their labels are worked out once, at the newest
+                    self.live.push(*frame, labels=self.frames.empty())
                 except BaseException as e:  # re-raised in the recording loop
                     self.error = e
 

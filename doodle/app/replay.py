@@ -53,8 +53,11 @@ def replay(doodle: Doodle, compiled, params: SegmenterParams = SegmenterParams()
     action is decided (an interaction's roles once more, with its name, when the
     interaction is decided; a refused action is not an action) — and before that, as soon
     as it is provisional (``Recognised.final`` False: what the tokens so far say, see
-    :class:`grammar.recognizer.Live`). ``automata`` (the Matcher's tables per track) may be
-    given to skip compiling them."""
+    :class:`grammar.recognizer.Live`). At a speed, a frame processed when the next is due
+    already leaves the provisional actions to the next frame on time, so that a replay
+    fallen behind (deciding an action can take a few tenths of a second) catches up before
+    it shows them. ``automata`` (the Matcher's tables per track) may be given to skip
+    compiling them."""
     from grammar.contexter import InteractionSegment, Refused
     from grammar.recognizer import Live
 
@@ -85,8 +88,10 @@ def replay(doodle: Doodle, compiled, params: SegmenterParams = SegmenterParams()
             wait = start_wall + now / speed - clock()
             if wait > 0:
                 sleep(wait)
+        # behind the clock (the next frame due already): provisional actions wait for a frame on time
+        labels = not speed or i + 1 == len(times) or clock() < start_wall + times[i + 1] / speed
         tick = time.perf_counter()
-        step = live.push(float(now), [(tr.p[i], tr.q[i], bool(tr.valid[i])) for tr in tracks])
+        step = live.push(float(now), [(tr.p[i], tr.q[i], bool(tr.valid[i])) for tr in tracks], labels)
         costs[i] = time.perf_counter() - tick
         report(step.provisional, now)
         report(step.heard, now)
