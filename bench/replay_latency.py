@@ -5,7 +5,7 @@ what each frame costs.
   decided it (final), and how long until its name was first shown, provisional or final
   (:class:`grammar.recognizer.Live`: provisional as soon as the tokens so far decide it, if
   what the Segmenter still holds back stands) — median and p90 (target provisional ≤ 0.3 s),
-  over the actions that end a movement (a pause, Idle, is shown provisional from its start).
+  over the actions that end a movement (a pause, Idle, is not one: it is named once it is a pause whatever follows).
   Beside it, how often a provisional name was the one decided: of the provisional labels
   whose samples a final action covers, the share naming that action.
 * On the demo (seven times over, two tracks) with the built-in library, and on the real
@@ -65,7 +65,7 @@ def report(label: str, lines: list) -> None:
     covered = [a for a in agree if a is not None]
     pauses = sum(d.pauses for d in lines)
     print(f"  {label}: {len(final)} actions ending a movement"
-          + (f" (and {pauses} pauses, Idle: shown from their start)" if pauses else ""))
+          + (f" (and {pauses} pauses, Idle, not counted)" if pauses else ""))
     print(f"    name shown after the gesture ends (provisional or final): median {np.median(named):.2f} s, "
           f"p90 {np.percentile(named, 90):.2f} s   (target ≤ 0.3 s)")
     print(f"    decided (final):                                          median {np.median(final):.2f} s, "

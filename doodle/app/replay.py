@@ -106,7 +106,7 @@ class Latencies:
     final: list  # per action ending a movement: s from the gesture's end until it was decided
     named: list  # ... until its name was first shown, provisional or final
     agree: list  # per provisional label: whether the final action covering most of it names it (None: none)
-    pauses: int  # actions that are pauses (all their tokens stills: Idle), shown from their start
+    pauses: int  # actions that are pauses (all their tokens stills: Idle), not counted
 
 
 def latencies(doodle: Doodle, replayed: Replayed) -> Latencies:
@@ -114,7 +114,7 @@ def latencies(doodle: Doodle, replayed: Replayed) -> Latencies:
     the gesture ended it was decided, and how long until its name was first on screen
     (provisional or final). A gesture ends where the hand comes to rest after the action's
     segment — the first pause from its end on — or where the next action begins, if sooner.
-    A pause (Idle) is left out: it is shown provisional as soon as it begins."""
+    A pause (Idle) is left out: it is named once it is a pause whatever follows."""
     finals = {}
     for r in replayed.found:
         finals.setdefault((r.track, r.start), r)  # an interaction's roles repeat the action
