@@ -408,6 +408,7 @@ class Step:
     provisional: list = ()  # Heard (final False): actions newly provisional at this frame
 
 
+PAUSE = "Idle"  # the built-in action of a hand at rest
 TOLD = 64  # provisional labels a track remembers so as to report each once (more than stay undecided at a time)
 
 
@@ -436,7 +437,8 @@ class Live:
     change it: typically as soon as the pause after a gesture could be a pause, long before
     the pause ends and makes it final. Past what the Matcher has settled, learned gestures
     performed back to back are named as they end by a :class:`~grammar.spotter.Spotter`.
-    Each is reported once (again if its name changes); interactions are only reported final.
+    Each is reported once (again if its name changes, not once a later motion on its track
+    has been reported); interactions are only reported final.
     """
 
     def __init__(self, compiled: Compiled | None, names: list[str], rate: float, params: SegmenterParams = SegmenterParams(),
@@ -462,6 +464,7 @@ class Live:
         self._state = {n: frozenset(compiled.library.states if compiled is not None else ()) for n in self.names}
         self._shown = {n: [] for n in self.names}  # the provisional segments last worked out, per track
         self._told = {n: [] for n in self.names}  # the provisional segments last reported, in order (TOLD)
+        self._front = {n: -1 for n in self.names}  # where the latest motion reported provisional begins (sample)
         self._turn = 0  # the track whose provisional actions are worked out first at the next frame
         self._contexter = None
         if compiled is not None and len(self.names) > 1 and compiled.library.interactions:
@@ -560,12 +563,20 @@ class Live:
         mostly covers). The same motion, not any overlap: two readings of neighbouring motion
         that overlap at their ends (one decided as if the stream ended there, the next
         spotted past it) would otherwise each be reported again at every frame, and a
-        gesture repeated back to back would not be reported the second time."""
+        gesture repeated back to back would not be reported the second time. Never a motion
+        ending before the latest one reported there (other than a pause) begins: the live
+        view moves forward, and an earlier motion's name comes when it is decided — where
+        gestures follow each other without a pause, the reading of motion seconds old, not
+        settled yet, may change back and forth as the motion after it goes on."""
         told = self._told[name]
+        if s.end <= self._front[name]:
+            return False
         same = [o for o in told if 2 * (min(o.end, s.end) - max(o.start, s.start)) > min(o.end - o.start, s.end - s.start)]
         if same and same[-1].action == s.action:
             return False
         told[:] = [o for o in told if 2 * (min(o.end, s.end) - max(o.start, s.start)) <= o.end - o.start][-TOLD + 1:] + [s]
+        if s.action != PAUSE:
+            self._front[name] = max(self._front[name], s.start)
         return True
 
     def _owners_read(self, name: str) -> tuple:

@@ -402,6 +402,21 @@ def test_gestures_after_one_spotted_before_its_end_are_named_as_they_end(tmp_pat
         assert len(final) == 1 and shown and shown[0].at <= b + 0.3, g
 
 
+def test_a_motion_is_not_named_again_once_a_later_one_is(tmp_path):
+    """Sub_U007's left-right-left combo then five gestures, back to back: the combo's motion
+    is not settled for seconds, and its reading as if the stream ended there changed back
+    and forth as the motion after it went on — Side Walk Right shown for it at 7.5 s, the
+    combo again at 10.2 s, Side Walk Right again — while later gestures had been named.
+    The live view moves forward: a motion ending before the latest one named begins is
+    named only when decided, so no label comes seconds after its motion."""
+    _, truth, replayed = _in_order(tmp_path, 4, [("left_right_left_combo", 4), ("backflip", 4), ("cartwheel_right", 4),
+                                                 ("hook_right", 4), ("uppercut_right", 4), ("hook_right", 3)])
+    assert replayed.provisional and all(p.at - p.end < 3.0 for p in replayed.provisional)
+    for p, q in zip(replayed.provisional, replayed.provisional[1:]):
+        assert q.end > p.start or q.action == "Idle"  # in order
+    assert [f.action for f in replayed.found if f.start < truth[0][2] and f.action != "Idle"][:1] == ["left_right_left_combo"]
+
+
 def test_the_second_hand_waits_while_a_two_handed_gesture_may_be_under_way_back_to_back(tmp_path):
     """Sub_U002's gestures learned with both hands, four performed back to back: the fly_eagle
     begins more than a few tokens past the first hand's anchor. The second hand's own reading
