@@ -34,6 +34,8 @@ from grammar.refiner import Refiner, refine, unread
 from grammar.spotter import Spotter
 from library.manifest import load_combined
 
+PAUSE = "Idle"  # the built-in action of a hand at rest
+
 
 def load_actions(library_dir=None, use_builtin: bool = True) -> Compiled:
     """The built-in library, extended or overridden by the one in ``library_dir``, compiled."""
@@ -354,7 +356,7 @@ class _Chain:
         if matcher.unknown is not None:  # as it stands (a learned action may be found in it)
             segments.append(matcher.unknown)
         if self.refiner is None:
-            return segments
+            return self._no_hold(segments, len(self.tokens) + len(held))
         settled = (self.matcher.done, tuple((s.action, s.first, s.stop) for s in segments))
         refiner = self.refiner.fork()
         self._bind(refiner, tape)
@@ -367,10 +369,15 @@ class _Chain:
         if spotted:  # one reading per motion: what is decided as if the stream ended gives way to what is spotted
             f = spotted[0].first
             refined = [r if r.stop <= f else replace(r, stop=f, end=refiner.tokens[f - 1].end) for r in refined if r.first < f]
-        if self.segmenter.held_hold:  # a still read as a pause that may yet be a hold is not named a pause yet
-            refined = [r for r in refined if r.stop < len(refiner.tokens)
-                       or any(k.name != "T_STILL" for k in refiner.tokens[r.first:r.stop])]
-        return refined + spotted
+        return self._no_hold(refined, len(refiner.tokens)) + spotted
+
+    def _no_hold(self, segments: list[Segment], n: int) -> list[Segment]:
+        """``segments`` (of ``n`` tokens) less a pause over the still in progress while it may
+        yet be a hold (:attr:`Segmenter.held_hold`): the gesture before it is named as soon
+        as it could be a pause, the pause itself once it is one whatever follows."""
+        if not self.segmenter.held_hold:
+            return segments
+        return [s for s in segments if not (s.action == PAUSE and s.stop == n)]
 
     def pair_begun(self) -> bool:
         """Whether this track's motion past what its provisional reading has named so far
@@ -408,7 +415,6 @@ class Step:
     provisional: list = ()  # Heard (final False): actions newly provisional at this frame
 
 
-PAUSE = "Idle"  # the built-in action of a hand at rest
 TOLD = 64  # provisional labels a track remembers so as to report each once (more than stay undecided at a time)
 
 
