@@ -602,8 +602,9 @@ class Live:
 
     def _paired_shown(self, name: str) -> list[Segment]:
         """The two-handed actions shown provisional on the tracks deciding those that read
-        track ``name`` too (:func:`_owners`): the track's own reading there is that action."""
-        return [s for owner in self._owners.get(name, ()) for s in self._shown[owner]
+        track ``name`` too (:func:`_owners`), now or as last reported there: the track's own
+        reading there is that action."""
+        return [s for owner in self._owners.get(name, ()) for s in self._shown[owner] + self._told[owner]
                 if s.action in self._pairs and name in self._pairs[s.action]]
 
     def close(self, flush: dict | None = None) -> Step:

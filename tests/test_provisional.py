@@ -437,6 +437,25 @@ def test_the_second_hand_waits_while_a_two_handed_gesture_may_be_under_way_back_
     assert shown and not under
 
 
+def test_the_second_hand_is_not_read_on_its_own_under_a_two_handed_gesture_shown(tmp_path):
+    """Sub_U004's gestures learned with both hands; a cartwheel, the golf swing and a cartwheel
+    back to back. Once the first hand's track has shown the golf swing (a two-handed action),
+    the second hand's own reading of the motion under it is not shown, even when the first
+    hand's reading of the moment no longer reaches that far (as the screen still shows the
+    swing): before, Side Walk Left and Dodge within the swing, at 5.9 s."""
+    from bench.learning_protocol import stream
+
+    data, user, classes, compiled = _learned(tmp_path, 2, tracks=("c0", "c1"))
+    takes = [("cartwheel_right", 4), ("golf_swing", 3), ("cartwheel_right", 3)]
+    doodle, _ = stream([(g, data[user][g][j].select(["c0", "c1"])) for g, j in takes], _InOrder(), idle=False)
+    replayed = replay(doodle, compiled)
+    finals_equal_batch_on_every_track(doodle, replayed, compiled)
+    swing = [p for p in replayed.provisional if p.track == "c0" and p.action == "golf_swing"]
+    assert swing
+    assert not [p for p in replayed.provisional if p.track == "c1" and p.at > swing[0].at and p.action not in classes
+                and swing[0].start <= p.start and p.end <= swing[0].end]
+
+
 def test_gestures_learned_with_both_hands_are_named_on_both_tracks(tmp_path):
     """Two-handed gestures (learned from c0 and c1 together) streamed with pauses between:
     finals equal the batch, and the second hand's track shows the two-handed action
