@@ -5,7 +5,8 @@ what each frame costs.
   decided it (final), and how long until its name was first shown, provisional or final
   (:class:`grammar.recognizer.Live`: provisional as soon as the tokens so far decide it, if
   what the Segmenter still holds back stands) — median and p90 (target provisional ≤ 0.3 s),
-  over the actions that end a movement (a pause, Idle, is not one: it is named once it is a pause whatever follows).
+  over the actions that end a movement (a pause, Idle, is not one: it is named once it is a
+  pause whatever follows).
   Beside it, how often a provisional name was the one decided: of the provisional labels
   whose samples a final action covers, the share naming that action.
 * On the demo (seven times over, two tracks) with the built-in library, and on the real
@@ -14,7 +15,9 @@ what each frame costs.
   gesture streamed one after another with an idle stretch between them (the live case) —
   read with that library alone and with the built-in actions beside it, and back to back
   (no pause between gestures, where a gesture ends where the next begins) with the
-  built-in actions; and two
+  built-in actions, and those once more at real speed on the clock a performer watches
+  (:class:`RealTime`: the time recognition takes counted, as ``doodle replay --speed 1``
+  shows it); and two
   performers of built-in actions, one per track (``bench.performers``' two-performer
   scenes), beside two users' gestures learned with both hands — where a built-in segment
   waits for what the other hand's Matcher reads, and the other hand's for the two-handed

@@ -136,10 +136,9 @@ class Spotter:
                 self._move(k + 1)
             return spot
         code = CODES[token.name]
-        if keep:
+        if keep:  # (going on may move the anchor, which renews the kept dicts)
             self._go_on(refiner, k, code)
-            states, scores = self._states, self._scores
-            anchor = self.anchor
+            states, scores, anchor = self._states, self._scores, self.anchor
         for f in list(states):
             if k + 1 - f > SPOT_MAX:
                 del states[f]
@@ -168,7 +167,7 @@ class Spotter:
         if not keep:
             return spot
         going = [best[0], states[spot[0]].copy()]  # (before the anchor moves past its start)
-        self._spot(spot, c, keep)
+        self._spot(spot, c, True)
         self._going = going
         return spot
 
