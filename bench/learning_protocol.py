@@ -23,7 +23,7 @@ Protocol (the one someone with new users would run):
   overlaps a true gesture not yet counted (precision, recall, F1).
 * **Constants held out.** Each constant the recogniser keeps (:data:`grammar.refiner.WEIGHT`,
   :data:`grammar.shapes.SPREAD`, :data:`grammar.refiner.TEMPO`, :data:`grammar.shapes.TURN` — which a
-  library's own examples may overrule, :func:`grammar.shapes.choose_turn`) is swept over a
+  library's own examples may overrule, :func:`grammar.shapes.choose_turn` —, :data:`grammar.shapes.PACE`) is swept over a
   grid; for each user the value best on the other four users is taken and that user's
   figure at it reported (leave one user out), beside the product's value on all five
   (in-sample). Nothing is chosen on the user it is reported for.
@@ -49,10 +49,11 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "vive-gestures"
 SETTINGS = (("c0",), ("c0", "c1"))
 GRID = {"WEIGHT": (8.0, 31.0, 62.0, 125.0), "SPREAD": (0.0, 0.95, 0.99),
-        "TEMPO": (1.25, 1.5, 2.0, np.inf), "TURN": (0.25, 0.5, 1.0)}  # swept by `make bench` (the product's
+        "TEMPO": (1.25, 1.5, 2.0, np.inf), "TURN": (0.25, 0.5, 1.0), "PACE": (0.0, 1.0, 2.0, 4.0)}  # swept by `make bench` (the product's
 #                                                                       values among them)
 FULL_GRID = {"WEIGHT": (0.0, 8.0, 31.0, 62.0, 125.0), "SPREAD": (0.0, 0.9, 0.95, 0.99),
-             "TEMPO": (1.1, 1.25, 1.5, 2.0, 3.0, np.inf), "TURN": (0.0, 0.25, 0.5, 1.0)}  # with --full
+             "TEMPO": (1.1, 1.25, 1.5, 2.0, 3.0, np.inf), "TURN": (0.0, 0.25, 0.5, 1.0),
+             "PACE": (0.0, 0.5, 1.0, 2.0, 4.0)}  # with --full
 
 
 def load(root: Path = ROOT) -> dict:
@@ -234,7 +235,7 @@ def evaluate(data, users, classes, folders, streams, builtin: bool = False) -> d
 def main(quick: bool = False, full: bool = False) -> None:
     from grammar import refiner, shapes
 
-    home = {"WEIGHT": refiner, "SPREAD": shapes, "TEMPO": refiner, "TURN": shapes}  # where each constant is
+    home = {"WEIGHT": refiner, "SPREAD": shapes, "TEMPO": refiner, "TURN": shapes, "PACE": shapes}  # where each is
 
     global GRID
     if full:

@@ -59,6 +59,7 @@ class Learned:
     tolerance: float | None = None  # edits a new performance may be from the expression
     paths: np.ndarray | None = None  # the examples' paths resampled by arc length (grammar.shapes)
     seconds: tuple = ()  # each example's motion: from its first token's start to its last's end, pauses left out
+    spans: tuple = ()  # each example's motion as samples (first token's start, last token's end)
 
 
 def canonical(t: np.ndarray, p: np.ndarray, q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -312,16 +313,18 @@ def learn(examples: list[tuple[np.ndarray, np.ndarray, np.ndarray]], rate: float
     if min(durations) <= 0 or max(durations) > 10 * min(durations):
         raise DoodleError(f"examples last {', '.join(f'{d:.2f}' for d in durations)} s: one is more than 10× "
                           "another — were they all the same gesture?")
-    strings, seconds = [], []
+    strings, seconds, spans = [], [], []
     for k, (t, p, q) in enumerate(examples):
         tokens = _motion_tokens(Track(f"example {k + 1}", t, p, q, np.ones(len(t), dtype=bool)), rate, params)
         if not tokens:
             raise DoodleError(f"example {k + 1} is all still: nothing was performed")
         strings.append(tuple(k.name for k in tokens))
         seconds.append(max(float(t[tokens[-1].end - 1] - t[tokens[0].start]), 1.0 / rate))
+        spans.append((tokens[0].start, tokens[-1].end))
     average = token_string(dba(examples), rate, params)
     learned = replace(expression_of(strings + ([average] if average else [])),
-                      paths=np.array([shapes.resample(p) for _, p, _ in examples]), seconds=tuple(seconds))
+                      paths=np.array([shapes.resample(p) for _, p, _ in examples]), seconds=tuple(seconds),
+                      spans=tuple(spans))
     return replace(learned, tolerance=tolerance(learned.strings, len(strings))) if with_tolerance else learned
 
 

@@ -108,11 +108,11 @@ def compile_library(library: Library, known: dict | None = None) -> Compiled:
     named = {}
     for a in recognisable.actions:
         if a.shape:
-            paths, quats, seconds = load_shape(a.shape, a.name)
+            paths, quats, seconds, elapsed = load_shape(a.shape, a.name)
             if paths.shape[1] != max(1, len(a.tracks)):
                 raise DoodleError(f"{a.source}: action {a.name!r}: its shape file {a.shape} holds "
                                   f"{paths.shape[1]} track(s), its 'tracks' name {max(1, len(a.tracks))}")
-            named[a.name] = (paths, quats, seconds)
+            named[a.name] = (paths, quats, seconds, elapsed)
     return Compiled(recognisable, tuple(compile_action(a, known) for a in recognisable.actions), compile_roles(library, known),
                     shape_set(named, {a.name: a.expression for a in recognisable.actions},
                               {a.name: a.track for a in recognisable.actions},

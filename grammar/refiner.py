@@ -20,7 +20,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from grammar.shapes import Group, ShapeSet, sample
+from grammar.shapes import Group, ShapeSet, sample, times
 
 WEIGHT = 62.0  # edits one unit of shape distance counts as (two per step whose features are 1 apart; `make bench` shows it held out)
 REACH = 3  # tokens a refined segment may extend past the Matcher's at either end
@@ -587,10 +587,11 @@ class Refiner:
     def lasts(self, windows: list) -> np.ndarray:
         """(windows, actions): whether each window lasts no more than :data:`TEMPO` × the
         action's longest example and no less than its shortest / :data:`TEMPO` (True where
-        the examples' durations or the samples' times are not known). Arc-length resampling
-        makes shapes blind to time: without this a gesture and a small one after it with no
-        pause between (a combo, then a hook that barely moves this hand) read as the first
-        alone, and a part of a gesture as a whole gesture of another action. Performers do
+        the examples' durations or the samples' times are not known). Shapes are resampled
+        by arc length and compare when along the path each step comes (:data:`grammar.shapes.PACE`),
+        not how long the whole lasts: without this a gesture and a small one after it with no
+        pause between (a combo, then a hook that barely moves this hand) would more often read
+        as the first alone, and a part of a gesture as a whole gesture of another action. Performers do
         vary in tempo: the factor is wide (by leave-one-user-out, ``make bench``), and
         learning keeps each example's motion without its still ends
         (:attr:`grammar.learn.Learned.seconds`), as a window holds no pause at its ends."""
@@ -707,7 +708,10 @@ class Refiner:
             return None
         poses = [(p[a:b][keep], (q[a:b][keep] if q is not None else np.tile([0.0, 0.0, 0.0, 1.0], (int(keep.sum()), 1))))
                  for p, q, _ in tracks]
-        return sample(poses)
+        if not group.pace:
+            return (*sample(poses), None)
+        clock = np.arange(a, b, dtype=float) if self.t is None or len(self.t) < b else np.asarray(self.t[a:b], dtype=float)
+        return (*sample(poses), times(poses, clock[keep]))
 
     def _emit(self, action: str, f: int, e: int, exact: bool, distance) -> list:
         from grammar.matcher import UNKNOWN, Segment

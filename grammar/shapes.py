@@ -87,6 +87,7 @@ def dtw_costs(x: np.ndarray, templates: np.ndarray, part: tuple | None = None) -
 
 # --- poses of one or several tracks: resampled together, as features ---------------------
 
+PACE = 2.0  # weight of the share of time gone by beside the path's directions (`make bench` shows it held out)
 TURN = 0.5  # weight of the controller's turn beside the path's directions (a library's examples may
 #             overrule it: choose_turn; `make bench` shows it held out)
 
@@ -97,9 +98,7 @@ def sample(poses, points: int = POINTS) -> tuple[np.ndarray, np.ndarray]:
     time axis for both hands: the one that moves drives it, the other is read at the same
     moments): paths (T, points, 3) from their first points, orientations (T, points, 4)."""
     poses = [(np.asarray(p, dtype=float), np.asarray(q, dtype=float)) for p, q in poses]
-    s = np.zeros(len(poses[0][0]))
-    for p, _ in poses:
-        s[1:] += np.cumsum(np.linalg.norm(np.diff(p, axis=0), axis=1))
+    s = _summed_arc(poses)
     paths, quats = [], []
     for p, q in poses:
         q = np.where(np.isfinite(q).all(axis=1, keepdims=True), q, [0.0, 0.0, 0.0, 1.0])
@@ -116,7 +115,30 @@ def sample(poses, points: int = POINTS) -> tuple[np.ndarray, np.ndarray]:
     return np.array(paths), np.array(quats)
 
 
-def features(paths: np.ndarray, quats: np.ndarray | None, turn: float | None = None) -> np.ndarray:
+def _summed_arc(poses) -> np.ndarray:
+    """The tracks' summed path length at each sample, from 0."""
+    s = np.zeros(len(poses[0][0]))
+    for p, _ in poses:
+        s[1:] += np.cumsum(np.linalg.norm(np.diff(np.asarray(p, dtype=float), axis=0), axis=1))
+    return s
+
+
+def times(poses, t: np.ndarray, motion: tuple | None = None, points: int = POINTS) -> np.ndarray:
+    """The share of the motion's time gone by at each of :func:`sample`'s points (points,),
+    0 to 1: ``t`` the samples' times, ``motion`` the times ``(t0, t1)`` the motion lasts
+    (default: the first to the last sample; a learned example's still ends are left out so,
+    as a window holds no pause at its ends)."""
+    t = np.asarray(t, dtype=float)
+    t0, t1 = (t[0], t[-1]) if motion is None else motion
+    s = _summed_arc(poses)
+    if s[-1] <= 0 or t1 <= t0:
+        return np.linspace(0.0, 1.0, points)
+    at = np.interp(np.linspace(0.0, s[-1], points), s, t)
+    return np.clip((at - t0) / (t1 - t0), 0.0, 1.0)
+
+
+def features(paths: np.ndarray, quats: np.ndarray | None, turn: float | None = None,
+             elapsed: np.ndarray | None = None, pace: float | None = None) -> np.ndarray:
     """Per step of resampled tracks (T, n, 3) — and their orientations (T, n, 4) — the unit
     direction of each track's step and, weighted by ``turn`` (default :data:`TURN`), how its
     controller is turned from its mean orientation over the path ``q̄``: the rotation
@@ -130,10 +152,18 @@ def features(paths: np.ndarray, quats: np.ndarray | None, turn: float | None = N
     place (no path, so no weight in the arc-length resampling) would otherwise shift every
     step's feature. How the hand
     turns as it moves (a hook's forearm roll, an uppercut's lift) is the person's gesture;
-    how they hold the controller is not."""
+    how they hold the controller is not.
+
+    With ``elapsed`` (:func:`times`, the share of the motion's time gone by at each point), a
+    last column, weighted by ``pace`` (default :data:`PACE`): that share at each step's
+    middle. Arc-length resampling alone is blind to time — a still stretch, however long, is
+    a few steps of noise — so a window holding a gesture and a small one beside it (a combo,
+    then a hook that barely moves this hand) reads as the first alone; with time, the
+    stretch the small one lasts moves every later step's share away from the examples'."""
     from doodle.core import quat
 
     turn = TURN if turn is None else turn
+    pace = PACE if pace is None else pace
     cols = []
     for k, path in enumerate(paths):
         cols.append(directions(path))
@@ -145,6 +175,8 @@ def features(paths: np.ndarray, quats: np.ndarray | None, turn: float | None = N
             mean = mean / max(float(np.linalg.norm(mean)), 1e-12)
             since = quat.multiply(mid, quat.conjugate(np.broadcast_to(mean, mid.shape)))
             cols += [turn * quat.rotate(since, axis) for axis in np.eye(3)]
+    if elapsed is not None and pace > 0:
+        cols.append(pace * 0.5 * (elapsed[1:] + elapsed[:-1])[:, None])
     return np.hstack(cols)
 
 
@@ -163,6 +195,7 @@ class Group:
     templates: np.ndarray  # (K, POINTS - 1, D) features of every example of the group's actions
     owner: np.ndarray  # (K,) index into ShapeSet.names, sorted
     turn: float = TURN  # the weight of orientation in its features (:func:`choose_turn`)
+    pace: float = 0.0  # the weight of the time gone by in its features (0: its examples' times are not known)
 
 
 @dataclass(frozen=True, eq=False)
@@ -189,18 +222,23 @@ class ShapeSet:
 
     def distances_of(self, windows: list, read, part: tuple | None = None) -> np.ndarray:
         """Per window and action, the shape distance (inf where the action was not scored).
-        ``read(group, window)`` gives a window's (paths, quats) for a group's tracks, or None.
-        With ``part``, to the examples' beginnings (:func:`dtw_costs`)."""
+        ``read(group, window)`` gives a window's (paths, quats, elapsed) for a group's tracks
+        (:func:`sample`, :func:`times`), or None. With ``part``, to the examples' beginnings
+        (:func:`dtw_costs`; the time gone by left out: a beginning's share of its example's
+        time is not a window's of its own)."""
         out = np.full((len(windows), len(self.names)), np.inf)
         for g in self.groups:
+            pace = g.pace if part is None else 0.0
             feats, rows = [], []
             for w, window in enumerate(windows):
                 pq = read(g, window)
                 if pq is not None:
-                    feats.append(features(pq[0], pq[1] if g.oriented else None, g.turn))
+                    feats.append(features(pq[0], pq[1] if g.oriented else None, g.turn, pq[2], pace))
                     rows.append(w)
             if rows:
-                out[np.array(rows)[:, None], np.unique(g.owner)[None, :]] = _nearest(g, np.array(feats), part)
+                templates = g.templates if pace == g.pace else g.templates[..., :-1]
+                out[np.array(rows)[:, None], np.unique(g.owner)[None, :]] = _nearest(g, np.array(feats), part,
+                                                                                     templates)
         return out
 
     def distances(self, x: np.ndarray) -> np.ndarray:
@@ -215,13 +253,15 @@ class ShapeSet:
         return out[0] if single else out
 
 
-def _nearest(group: Group, x: np.ndarray, part: tuple | None = None) -> np.ndarray:
+def _nearest(group: Group, x: np.ndarray, part: tuple | None = None, templates: np.ndarray | None = None) -> np.ndarray:
     """(B, actions of the group): the smallest DTW cost of each of x to each action's examples
-    (with ``part``, to their beginnings: :func:`dtw_costs`)."""
-    if len(x) * len(group.templates) > CHUNK:  # bounded memory: in chunks
-        step = max(1, CHUNK // len(group.templates))
-        return np.concatenate([_nearest(group, x[k:k + step], part) for k in range(0, len(x), step)])
-    costs = dtw_costs(x, group.templates, part)
+    (with ``part``, to their beginnings: :func:`dtw_costs`; ``templates`` instead of the
+    group's own, the same examples' features read otherwise)."""
+    templates = group.templates if templates is None else templates
+    if len(x) * len(templates) > CHUNK:  # bounded memory: in chunks
+        step = max(1, CHUNK // len(templates))
+        return np.concatenate([_nearest(group, x[k:k + step], part, templates) for k in range(0, len(x), step)])
+    costs = dtw_costs(x, templates, part)
     starts = np.searchsorted(group.owner, np.unique(group.owner))
     return np.minimum.reduceat(costs, starts, axis=-1)
 
@@ -230,13 +270,16 @@ FORMAT = 2
 STRADDLES = 4  # synthetic negatives per example: joined to this many others, spread over the library
 
 
-def save_paths(path, paths: np.ndarray, quats: np.ndarray | None = None, seconds=None) -> None:
+def save_paths(path, paths: np.ndarray, quats: np.ndarray | None = None, seconds=None, elapsed=None) -> None:
     """Write example shapes to ``path`` (.npz, no pickles), atomically: paths (k, n, 3) of
     one track (format 1), or paths (k, T, n, 3) with orientations (k, T, n, 4) of T tracks
-    read together (format 2); with ``seconds`` (k,), how long each example lasted."""
+    read together (format 2); with ``seconds`` (k,), how long each example lasted, and with
+    ``elapsed`` (k, n), the share of its time gone by at each point (:func:`times`)."""
     from doodle.core.files import atomic_path
 
     extra = {} if seconds is None else {"seconds": np.asarray(seconds, dtype=float)}
+    if elapsed is not None:
+        extra["elapsed"] = np.asarray(elapsed, dtype=float)
     with atomic_path(path) as tmp:
         with open(tmp, "wb") as f:
             if quats is None:
@@ -248,14 +291,14 @@ def save_paths(path, paths: np.ndarray, quats: np.ndarray | None = None, seconds
 
 def load_paths(path, action: str = "") -> np.ndarray:
     """Example paths (k, n, 3) of the first track of a shape file; DoodleError naming the file and action."""
-    paths, _, _ = load_shape(path, action)
-    return paths[:, 0]
+    return load_shape(path, action)[0][:, 0]
 
 
-def load_shape(path, action: str = "") -> tuple[np.ndarray, np.ndarray | None, np.ndarray | None]:
+def load_shape(path, action: str = "") -> tuple:
     """Example paths (k, T, n, 3), orientations (k, T, n, 4) or None (format 1, paths
-    alone) and each example's duration in seconds (k,) or None (files written without)
-    from a shape file; DoodleError naming the file and action."""
+    alone), each example's duration in seconds (k,) and the share of its time gone by at
+    each point (k, n), each None where the file was written without; DoodleError naming the
+    file and action."""
     from doodle.core.errors import DoodleError
     from doodle.core.npz import read_npz
 
@@ -291,14 +334,21 @@ def load_shape(path, action: str = "") -> tuple[np.ndarray, np.ndarray | None, n
                                 or not np.isfinite(seconds).all() or seconds.min() <= 0):
         raise DoodleError(f"{where}: 'seconds' must be one positive duration per example ({paths.shape[0]}), "
                           f"got {seconds.dtype} {seconds.shape}")
+    elapsed = arrays.get("elapsed")
+    if elapsed is not None and (elapsed.dtype.kind != "f" or elapsed.shape != (paths.shape[0], POINTS)
+                                or not np.isfinite(elapsed).all() or elapsed.min() < 0 or elapsed.max() > 1
+                                or (np.diff(elapsed, axis=1) < 0).any()):
+        raise DoodleError(f"{where}: 'elapsed' must be a float array ({paths.shape[0]}, {POINTS}) rising from 0 "
+                          f"to 1 along each example, got {elapsed.dtype} {elapsed.shape}")
     return paths.astype(float), (None if quats is None else quats.astype(float)), \
-        (None if seconds is None else seconds.astype(float))
+        (None if seconds is None else seconds.astype(float)), (None if elapsed is None else elapsed.astype(float))
 
 
 def shape_set(named: dict, expressions: dict, tracks: dict | None = None, cap: float = 20.0,
               automaton=None, partners: dict | None = None) -> ShapeSet | None:
     """A :class:`ShapeSet` from ``{action: example shapes}`` — paths (k, n, 3), or
-    ``(paths (k, T, n, 3), quats (k, T, n, 4) | None[, seconds (k,) | None])`` — the actions' expressions, the
+    ``(paths (k, T, n, 3), quats (k, T, n, 4) | None[, seconds (k,) | None[, elapsed (k, n) |
+    None]])`` (:func:`load_shape`) — the actions' expressions, the
     tracks they are recognised on (``{action: track}``, default none) and, for actions read
     on several tracks, the others (``{action: (track, …)}``); None when no action has
     shapes. Edit distances count up to ``cap``; ``automaton``, when given, is a ready one
@@ -314,24 +364,29 @@ def shape_set(named: dict, expressions: dict, tracks: dict | None = None, cap: f
     keyed, longest, shortest = {}, np.full(len(names), np.inf), np.zeros(len(names))
     for k, n in enumerate(names):
         shape = named[n]
-        paths, quats, seconds = (shape, None, None) if isinstance(shape, np.ndarray) else (tuple(shape) + (None,))[:3]
+        paths, quats, seconds, elapsed = ((shape, None, None, None) if isinstance(shape, np.ndarray)
+                                          else (tuple(shape) + (None, None))[:4])
         longest[k] = np.inf if seconds is None else float(np.max(seconds))
         shortest[k] = 0.0 if seconds is None else float(np.min(seconds))
         paths = np.asarray(paths, dtype=float)
         if paths.ndim == 3:
             paths = paths[:, None]
         others = tuple(partners.get(n, ()))
-        key = ((tracks.get(n),) + others if others else (None,), quats is not None, paths.shape[1])
-        keyed.setdefault(key, []).append((k, paths, quats))
+        timed = elapsed is not None and PACE > 0
+        key = ((tracks.get(n),) + others if others else (None,), quats is not None, paths.shape[1], timed)
+        keyed.setdefault(key, []).append((k, paths, quats, np.asarray(elapsed, dtype=float) if timed else None,
+                                          np.ones(len(paths)) if seconds is None else np.asarray(seconds, dtype=float)))
     groups, reject = [], np.zeros(len(names))
-    for (read, oriented, _), shapes in keyed.items():
-        owner = np.concatenate([np.full(len(paths), k) for k, paths, _ in shapes])
-        turn = choose_turn(shapes, owner) if oriented else 0.0
+    for (read, oriented, _, timed), shapes in keyed.items():
+        owner = np.concatenate([np.full(len(paths), k) for k, paths, *_ in shapes])
+        pace = PACE if timed else 0.0
+        turn = choose_turn(shapes, owner, pace) if oriented else 0.0
         oriented = oriented and turn > 0
-        members = [(k, np.array([features(paths[j], quats[j] if oriented else None, turn) for j in range(len(paths))]),
-                    paths, quats if oriented else None) for k, paths, quats in shapes]
-        templates = np.concatenate([f for _, f, _, _ in members])
-        group = Group(read, oriented, templates, owner, turn)
+        members = [(k, np.array([features(paths[j], quats[j] if oriented else None, turn,
+                                          None if elapsed is None else elapsed[j], pace) for j in range(len(paths))]),
+                    paths, quats if oriented else None, elapsed, seconds) for k, paths, quats, elapsed, seconds in shapes]
+        templates = np.concatenate([f for _, f, *_ in members])
+        group = Group(read, oriented, templates, owner, turn, pace)
         groups.append(group)
         reject[[k for k, *_ in members]] = reject_distances(group, members)
     auto = automaton or Automaton(list(names), [compile_expression(parse(expressions[n], n)) for n in names],
@@ -344,9 +399,10 @@ TURNS = (0.0, 0.25, 0.5, 1.0)  # the orientation weights a library may choose am
 EVIDENCE = 0.05  # a library leaves TURN only when its examples show another weight better at this level
 
 
-def choose_turn(shapes: list, owner: np.ndarray) -> float:
+def choose_turn(shapes: list, owner: np.ndarray, pace: float = 0.0) -> float:
     """The weight of the controllers' turn in a group's features: :data:`TURN` unless the
-    group's own examples (``[(action, paths, quats)]``, ``owner`` their actions in order)
+    group's own examples (``[(action, paths, quats[, elapsed, …])]``, ``owner`` their
+    actions in order; ``pace`` the group's weight of the time gone by)
     show clearly that another weight of :data:`TURNS` tells their actions apart better.
     Each example is left out in turn and read by its nearest other example; the best other
     weight (most examples read right; on a tie, the larger mean log ratio of each example's
@@ -369,8 +425,9 @@ def choose_turn(shapes: list, owner: np.ndarray) -> float:
         return TURN
     reads, keys = {}, {}
     for turn in sorted(set(TURNS) | {TURN}):
-        feats = np.array([features(paths[j], quats[j] if turn > 0 else None, turn)
-                          for _, paths, quats in shapes for j in range(len(paths))])
+        feats = np.array([features(paths[j], quats[j] if turn > 0 else None, turn,
+                                   rest[0][j] if rest and rest[0] is not None else None, pace)
+                          for _, paths, quats, *rest in shapes for j in range(len(paths))])
         everyone = np.concatenate([dtw_costs(feats[k:k + CHUNK // len(feats) + 1], feats)
                                    for k in range(0, len(feats), CHUNK // len(feats) + 1)])  # (K, K)
         right, ratios = [], []
@@ -434,16 +491,17 @@ def reject_distances(group: Group, members: list) -> np.ndarray:
     of them. The largest of three alone would reject a quarter of new performances like
     them (a fourth draw exceeds the largest of three with probability ¼), and more from a
     person the examples did not come from."""
-    pieces = []  # (paths (T, n, 3), quats or None) of every example
-    for _, _, paths, quats in members:
-        pieces += [(paths[j], None if quats is None else quats[j]) for j in range(len(paths))]
+    pieces = []  # (paths (T, n, 3), quats or None, times (n,) in seconds or None) of every example
+    for _, _, paths, quats, elapsed, seconds in members:
+        pieces += [(paths[j], None if quats is None else quats[j], None if elapsed is None else elapsed[j] * seconds[j])
+                   for j in range(len(paths))]
     half = POINTS // 2
     n = len(pieces)  # each example followed by STRADDLES others spread over the library
     pairs = sorted({(i, (i + 1 + m * max(1, (n - 1) // STRADDLES)) % n) for i in range(n)
                     for m in range(min(STRADDLES, n - 1))})
     straddles = []
     for i, j in pairs:
-        (pa, qa), (pb, qb) = pieces[i], pieces[j]
+        (pa, qa, ta), (pb, qb, tb) = pieces[i], pieces[j]
         poses = []
         for t in range(len(pa)):
             join = pa[t, -1] - pa[t, half]  # b's first half moved on from where a's second half ends
@@ -452,10 +510,11 @@ def reject_distances(group: Group, members: list) -> np.ndarray:
                  else np.tile([0.0, 0.0, 0.0, 1.0], (len(p), 1)))
             poses.append((p, q))
         paths, quats = sample(poses)
-        straddles.append(features(paths, quats if qa is not None else None, group.turn))
+        elapsed = None if ta is None else times(poses, np.concatenate([ta[half:], ta[-1] + tb[:half + 1]]))
+        straddles.append(features(paths, quats if qa is not None else None, group.turn, elapsed, group.pace))
     near = _nearest(group, np.array(straddles)).min(axis=0) if straddles else None
     out = []
-    for slot, (k, feats, _, _) in enumerate(members):
+    for slot, (k, *_) in enumerate(members):
         own = group.templates[group.owner == k]
         if len(own) < 2:
             spread = 0.0

@@ -65,6 +65,50 @@ def test_resampled_directions_ignore_speed_and_place():
     assert np.all(shapes.resample(np.zeros((5, 3))) == 0)  # a still hand: no NaN
 
 
+@settings(max_examples=25, deadline=None)
+@given(st.sampled_from([30.0, 60.0, 90.0, 144.0]), st.floats(0.2, 5.0), st.floats(0.01, 10.0), st.integers(0, 2**31))
+def test_the_time_gone_by_is_the_motion_s_whatever_its_rate_size_and_place(rate, seconds, size, seed):
+    """:func:`shapes.times`: the share of the motion's time gone by at each resampled point
+    rises from 0 to 1, and is the same however fast the motion is sampled, however large
+    or long it is and wherever it is (within the sampling's resolution)."""
+    rng = np.random.default_rng(seed)
+    turns = rng.uniform(0.5, 3.0)
+
+    def motion(t):  # uneven speed: slow, fast, slow
+        u = t / seconds
+        s = u - np.sin(2 * np.pi * u) / (2 * np.pi)
+        return size * np.column_stack([np.cos(turns * s), np.sin(turns * s), s]) + rng.normal(size=3)
+
+    def elapsed(r):
+        t = np.arange(0.0, seconds + 1e-9, 1.0 / r)
+        t = t if t[-1] == seconds else np.append(t, seconds)
+        return shapes.times([(motion(t), np.tile([0.0, 0.0, 0.0, 1.0], (len(t), 1)))], t)
+
+    fine, e = elapsed(1000.0), elapsed(rate)
+    assert e[0] == 0.0 and e[-1] == 1.0 and np.all(np.diff(e) >= 0)
+    assert np.abs(e - fine).max() < 0.05
+    s = np.linspace(0, 1, shapes.POINTS)
+    assert np.abs(fine - (s + 0 * fine)).max() > 0.02  # uneven speed: not the share of the path
+
+
+def test_a_still_stretch_takes_time_not_path():
+    """Arc-length resampling alone hardly sees a long still stretch (a hand held with
+    tracking noise, then a curve); the time gone by does, and moves the steps after it away
+    from the curve performed without it."""
+    t = np.linspace(0.0, 3.0, 271)
+    a = np.clip(t - 1.0, 0, None) * 1.5
+    curve = np.column_stack([np.cos(a), np.sin(a), 0.2 * a]) * 0.3 + np.random.default_rng(0).normal(0, 3e-4, (271, 3))
+    q = np.tile([0.0, 0.0, 0.0, 1.0], (len(t), 1))
+
+    def read(k, pace):
+        poses = [(curve[k:], q[k:])]
+        return shapes.features(*shapes.sample(poses), 0.5, shapes.times(poses, t[k:]), pace)
+
+    blind, timed = (shapes.dtw_costs(read(0, pace), read(91, pace)[None])[0] for pace in (0.0, 1.0))
+    assert timed > blind + 0.02  # the still third of the time shifts the later steps' shares
+    assert np.allclose(read(91, 1.0)[:, -1], (np.arange(shapes.POINTS - 1) + 0.5) / (shapes.POINTS - 1), atol=0.03)
+
+
 def test_shape_files_round_trip_and_bad_files(tmp_path):
     paths = np.random.default_rng(0).normal(size=(3, shapes.POINTS, 3))
     good = tmp_path / "a.npz"
@@ -706,12 +750,35 @@ def test_gestures_in_a_pending_run_with_what_a_window_gave_up_are_searched(tmp_p
     assert named() == ["fly_eagle"]
 
 
+def test_a_small_gesture_after_a_large_one_is_not_swallowed_by_it(tmp_path, monkeypatch):
+    """Sub_U007's held-out golf swing and then a left hook back to back (c0, where the hook
+    moves the hand 10 cm against the swing's 1.5 m): by arc length alone the swing's window
+    running on over the hook reads as the swing (the hook a few steps of path); with the
+    share of time gone by (the hook lasts two of the window's five seconds), both are read."""
+    from bench.learning_protocol import load as load_vive, make_library, stream
+    from grammar.recognizer import load_actions, recognize
+
+    if not VIVE.is_dir():
+        pytest.skip("real Vive recordings not found")
+    user = load_vive(VIVE)["Sub_U007"]
+    lib = make_library(tmp_path / "mine", {g: user[g][:3] for g in sorted(user)}, ("c0",))
+    gestures = ["golf_swing", "hook_left"]
+    doodle, _ = stream([(g, user[g][k]) for g, k in zip(gestures, (3, 4))], np.random.default_rng(0), False)
+
+    def named():
+        return [s.action for s in recognize(doodle, load_actions(lib, True))["c0"][1] if s.action not in ("unknown", "Idle")]
+
+    assert named() == gestures
+    monkeypatch.setattr(shapes, "PACE", 0.0)
+    assert named() == ["golf_swing"]
+
+
 def test_shape_files_keep_how_long_each_example_lasted(tmp_path):
     """``doodle learn`` writes each example's motion in seconds (its still ends left out)
     beside its shape; files without them still load (no durations compared), and bad
     durations are refused with the file named."""
     lib, files = _learn_all(tmp_path, ["hook_right"])
-    paths, quats, seconds = shapes.load_shape(lib / "shapes" / "hook_right.npz")
+    paths, quats, seconds, _ = shapes.load_shape(lib / "shapes" / "hook_right.npz")
     from doodle.input.csvimport import read_csv
 
     recorded = [read_csv(f, convention="unity").t for f in files["hook_right"][:3]]
@@ -719,7 +786,7 @@ def test_shape_files_keep_how_long_each_example_lasted(tmp_path):
     assert np.all(seconds <= [t[-1] - t[0] for t in recorded])
     old = tmp_path / "old.npz"
     shapes.save_paths(old, paths, quats)
-    assert shapes.load_shape(old)[2] is None
+    assert shapes.load_shape(old)[2] is None and shapes.load_shape(old)[3] is None
     for bad in (np.array([1.0, -1.0, 2.0]), np.array([1.0, 2.0]), np.array([1.0, np.nan, 2.0])):
         np.savez(tmp_path / "bad.npz", paths=paths, quats=quats, format=np.array(2), seconds=bad)
         with pytest.raises(DoodleError, match="bad.npz.*'seconds' must be one positive duration per example"):

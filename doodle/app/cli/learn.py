@@ -118,7 +118,7 @@ def learn_action(existing, name: str, doodles: list, tracks: list[str], params, 
 
     from doodle.core.files import safe_file_name
     from grammar.learn import learn
-    from grammar.shapes import sample
+    from grammar.shapes import sample, times
     from library.manifest import ActionDef, Library, manifest_path
 
     start = time.perf_counter()
@@ -129,10 +129,13 @@ def learn_action(existing, name: str, doodles: list, tracks: list[str], params, 
             learned.append(learn(examples, doodles[0].rate, params))
         except DoodleError as e:
             raise DoodleError(f"track {track}: {e}") from None
-    shapes = []
-    for d in doodles:  # the tracks' samples where every one of them is tracked, resampled together
-        keep = np.logical_and.reduce([d.track(t).valid for t in tracks])
-        shapes.append(sample([(d.track(t).p[keep], d.track(t).q[keep]) for t in tracks]))
+    shapes, elapsed = [], []
+    for d, (a, b) in zip(doodles, learned[0].spans):  # the tracks' samples where every one of them is tracked,
+        keep = np.logical_and.reduce([d.track(t).valid for t in tracks])  # resampled together
+        poses = [(d.track(t).p[keep], d.track(t).q[keep]) for t in tracks]
+        shapes.append(sample(poses))
+        clock = d.track(tracks[0]).t
+        elapsed.append(times(poses, clock[keep], (clock[a], clock[b - 1])))  # over the first track's motion
     took = time.perf_counter() - start
     learned[0] = _not_empty(learned[0])
     replaced = {name} | {f"{name}.{t}" for t in tracks}  # and the halves of a pair learned before
@@ -148,7 +151,7 @@ def learn_action(existing, name: str, doodles: list, tracks: list[str], params, 
     library = Library(existing.name, kept + (action,), existing.source, existing.roles, interactions, existing.states)
     paths = np.array([p for p, _ in shapes])
     quats = np.array([q for _, q in shapes])
-    return library, {file: (paths, quats, np.array(lead.seconds))}, learned, took
+    return library, {file: (paths, quats, np.array(lead.seconds), np.array(elapsed))}, learned, took
 
 
 def _not_empty(learned):
