@@ -775,10 +775,13 @@ def test_a_small_gesture_after_a_large_one_is_not_swallowed_by_it(tmp_path, monk
 
 def test_shape_files_keep_how_long_each_example_lasted(tmp_path):
     """``doodle learn`` writes each example's motion in seconds (its still ends left out)
-    beside its shape; files without them still load (no durations compared), and bad
-    durations are refused with the file named."""
+    beside its shape, and the share of that time gone by at each point; files without them
+    still load (no durations or times compared), and bad ones are refused with the file
+    named."""
     lib, files = _learn_all(tmp_path, ["hook_right"])
-    paths, quats, seconds, _ = shapes.load_shape(lib / "shapes" / "hook_right.npz")
+    paths, quats, seconds, elapsed = shapes.load_shape(lib / "shapes" / "hook_right.npz")
+    assert elapsed.shape == (3, shapes.POINTS) and np.all(np.diff(elapsed, axis=1) >= 0)
+    assert np.all(elapsed[:, 0] < 0.2) and np.all(elapsed[:, -1] > 0.8)
     from doodle.input.csvimport import read_csv
 
     recorded = [read_csv(f, convention="unity").t for f in files["hook_right"][:3]]
@@ -790,4 +793,8 @@ def test_shape_files_keep_how_long_each_example_lasted(tmp_path):
     for bad in (np.array([1.0, -1.0, 2.0]), np.array([1.0, 2.0]), np.array([1.0, np.nan, 2.0])):
         np.savez(tmp_path / "bad.npz", paths=paths, quats=quats, format=np.array(2), seconds=bad)
         with pytest.raises(DoodleError, match="bad.npz.*'seconds' must be one positive duration per example"):
+            shapes.load_shape(tmp_path / "bad.npz", "hook_right")
+    for bad in (elapsed[:, ::-1], elapsed * 2, elapsed[:2], np.where(elapsed > 0.5, np.nan, elapsed)):
+        np.savez(tmp_path / "bad.npz", paths=paths, quats=quats, format=np.array(2), seconds=seconds, elapsed=bad)
+        with pytest.raises(DoodleError, match="bad.npz.*'elapsed' must be a float array"):
             shapes.load_shape(tmp_path / "bad.npz", "hook_right")
