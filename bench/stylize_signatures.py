@@ -89,6 +89,53 @@ def table(paths: list[Path], title: str) -> tuple[int, int]:
     return shown, total
 
 
+COMBINED = ((1.0, 1.0), (1.0, -1.0), (-1.0, 1.0), (-1.0, -1.0))
+
+
+def _time_shows(styled, reference, lt: float) -> bool:
+    """Time's signature against ``reference``: Sudden faster and shorter, Sustained the reverse."""
+    return (styled.peak_speed > reference.peak_speed) == (lt > 0) and (styled.execution < reference.execution) == (lt > 0)
+
+
+def _weight_shows(styled, reference, lw: float) -> bool:
+    """Weight's signature against ``reference``: Strong wider and sharper, Light the reverse."""
+    return (styled.extent > reference.extent) == (lw > 0) and (styled.sharpness > reference.sharpness) == (lw > 0)
+
+
+def combined(paths: list[Path], title: str) -> None:
+    """The four Time × Weight States: does each Factor still show its signature with the
+    other applied — Time against the neutral clip and against Weight alone, Weight against
+    Time alone (Laban's Factors are independent: a Sudden Light is as Sudden as a Sudden
+    Strong)? Counts of clips, with pops and feet sliding more than neutral."""
+    counts = {s: [0, 0, 0, 0] for s in COMBINED}
+    bad = clips = 0
+    for path in paths:
+        if not path.exists():
+            continue
+        motion = read_bvh(path)
+        st = stages(motion)
+        neutral = signature(motion)
+        alone = {k: signature(stylize(motion, st, *k), neutral.effector)
+                 for k in ((1.0, 0.0), (-1.0, 0.0), (0.0, 1.0), (0.0, -1.0))}
+        clips += 1
+        for lt, lw in COMBINED:
+            out = stylize(motion, st, lt, lw)
+            s = signature(out, neutral.effector)
+            c = counts[lt, lw]
+            c[0] += _time_shows(s, neutral, lt)
+            c[1] += _time_shows(s, alone[0.0, lw], lt)
+            c[2] += _weight_shows(s, alone[lt, 0.0], lw)
+            q = check(out)
+            c[3] += bool(q.pops) or len(q.sliding) / out.frames > sliding_share(motion, out.frame_time) + 1e-9
+    print(f"{title}: Time × Weight together, clips of {clips} where each Factor shows its signature")
+    print(f"  {'State':<18} {'Time vs neutral':>16} {'Time vs Weight alone':>21} {'Weight vs Time alone':>21}"
+          f" {'pops or feet worse':>19}")
+    for (lt, lw), c in counts.items():
+        name = f"{'Sudden' if lt > 0 else 'Sustained'} {'Strong' if lw > 0 else 'Light'}"
+        print(f"  {name:<18} {c[0]:>16} {c[1]:>21} {c[2]:>21} {c[3]:>19}")
+    print(f"  all three checks: {sum(sum(c[:3]) for c in counts.values())} of {3 * len(COMBINED) * clips}")
+
+
 def fastest_real() -> None:
     """The fastest hands and feet (joints, between frames) of the real clips: the bound's calibration."""
     best = {}
@@ -118,8 +165,10 @@ def main(argv: list[str] | None = None) -> None:
     print("  (* the measures of the style's signature; fast: the styled clip's fastest joint, m/s)")
     if "--tuning" in argv or "--tuning-only" in argv:
         table(tuning_paths(), "Tuning clips (constants chosen on these)")
+        combined(tuning_paths(), "Tuning clips")
     if "--tuning-only" not in argv:
         table(held_out_paths(), "Held out: Bandai dataset-1 *_normal_001")
+        combined(held_out_paths(), "Held out")
     if "--calibrate" in argv:
         fastest_real()
 
