@@ -12,6 +12,11 @@ byebye, call, guide, kick, punch, respond, slash) — no constant was chosen on 
 clips (``--tuning``): Bandai dataset-1 ``call/punch/slash_normal_002`` and dataset-2's
 raise-up and wave clips. Also prints the fastest hands and feet of the real clips (the
 calibration of the speed bound).
+
+Then the four Time × Weight States together (:func:`combined`): in how many clips each
+Factor still shows its signature with the other applied — Time against the neutral clip and
+against Weight alone, Weight against Time alone — on the held-out clips, the tuning clips
+(with ``--tuning``) and ten other one-shots (:data:`OTHER`) that no choice was made on.
 """
 
 from __future__ import annotations
@@ -35,6 +40,18 @@ TUNING = ("dataset-1/dataset-1_call_normal_002", "dataset-1/dataset-1_punch_norm
           "dataset-2/dataset-2_raise-up-right-hand_normal_002", "dataset-2/dataset-2_wave-both-hands_normal_001",
           "dataset-2/dataset-2_wave-right-hand_normal_002")
 STYLES = ((1.0, 0.0), (-1.0, 0.0), (0.0, 1.0), (0.0, -1.0))
+
+
+# One-shots in neither set, read only by the Time × Weight table (:func:`combined`): the
+# dataset-2 takes the tuning set left out and DeepMimic's strikes and jump (another skeleton).
+OTHER = ("bandai/dataset-2/dataset-2_raise-up-left-hand_normal_001", "bandai/dataset-2/dataset-2_raise-up-left-hand_normal_002",
+         "bandai/dataset-2/dataset-2_raise-up-both-hands_normal_002", "bandai/dataset-2/dataset-2_raise-up-right-hand_normal_001",
+         "bandai/dataset-2/dataset-2_wave-both-hands_normal_002", "bandai/dataset-2/dataset-2_wave-right-hand_normal_001",
+         "deepmimic/punch", "deepmimic/kick", "deepmimic/spinkick", "deepmimic/jump")
+
+
+def other_paths() -> list[Path]:
+    return [MOCAP / f"{c}.bvh" for c in OTHER]
 
 
 def held_out_paths() -> list[Path]:
@@ -169,6 +186,7 @@ def main(argv: list[str] | None = None) -> None:
     if "--tuning-only" not in argv:
         table(held_out_paths(), "Held out: Bandai dataset-1 *_normal_001")
         combined(held_out_paths(), "Held out")
+        combined(other_paths(), "Other one-shots (Bandai dataset-2, DeepMimic)")
     if "--calibrate" in argv:
         fastest_real()
 
