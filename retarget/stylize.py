@@ -478,7 +478,7 @@ def _leg_bones(motion: Motion) -> set:
     return legs
 
 
-def _weight_times(world: np.ndarray, times: np.ndarray, lw: float, frame_time: float = 0.0,
+def _weight_times(world: np.ndarray, times: np.ndarray, lw: float, frame_time: float,
                   keep: tuple[int, ...] = ()) -> np.ndarray:
     """Output time of each frame once Weight has retimed a motion — joint positions
     ``world`` (F, J, 3), clip frames ``frame_time`` apart — whose frames already play at
