@@ -578,11 +578,7 @@ def stylize_staged(motion: Motion, stages: Stages, lt: float = 0.0, lw: float = 
     Both modifiers' pose edits (motion scales, reshaping) act on the clip's own frames; Time's
     playback rates (:func:`_time_rates`) act on the execution burst of the clip's most moving
     hand or foot (:func:`_execution`); Weight's retiming reads speeds as they play after
-    Time's and keeps the duration Time gave each stage (:func:`_weight_times`) — and Strong's
-    speed contrast fades as Time goes Sustained (``L_w (1 + L_t)``): a Sustained execution is
-    long, slow and even (§5.4.3), and a press has no sharp peak; with the full contrast, Sustained
-    Strong came out faster than neutral in 5 of the 9 held-out one-shots. The two time maps are
-    composed, bounded so no joint outruns real motion capture
+    Time's; the two time maps are composed, bounded so no joint outruns real motion capture
     (:func:`_bounded`), and the clip resampled once; then the feet that stood in the neutral
     clip are put back where they stood (:func:`_restore_contacts`, on the output frames).
     Quaternions come back sign-continuous per joint. ``L_t = L_w = 0`` returns the clip itself."""
@@ -605,9 +601,8 @@ def stylize_staged(motion: Motion, stages: Stages, lt: float = 0.0, lw: float = 
         m = _weight_poses(m, spans, lw, most_moving(motion, neutral_world))
     m = smooth_edit(motion, m)
     world = forward_kinematics(m)
-    contrast = lw * (1.0 + lt) if lw > 0 and lt < 0 else lw  # Strong's speed contrast fades as Time goes Sustained
-    if contrast:
-        times = _weight_times(world[0], times, contrast, motion.frame_time, spans if lt else ())
+    if lw:
+        times = _weight_times(world[0], times, lw, motion.frame_time, spans if lt else ())
     times = _smooth_rate(times, motion.frame_time)
     least = np.maximum(_least(world[0]), _planted_least(motion))
     for _ in range(5):  # the output measured as it plays — spline, contact IK and all — and slowed where too fast
