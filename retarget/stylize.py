@@ -47,7 +47,7 @@ from retarget.analysis import Stages, foot_contacts, guess_roles, partition, pel
 from retarget.effort_signature import FASTEST, RATE, burst, most_moving, speed_profile
 from retarget.feet import two_bone_ik
 from retarget.qa import Limits, check, planted_moves
-from retarget.skeleton import Motion, forward_kinematics, per_motion
+from retarget.skeleton import Motion, end_site_positions, forward_kinematics, per_motion
 
 ALPHA_WEIGHT = 1.5
 ALPHA_LIGHT = 0.5  # Light: speed as played ∝ V_e^(1 − 0.5|L_w|) — flattened, never inverted (α ≥ 1 would make the slowest frames the fastest)
@@ -530,10 +530,18 @@ def _bounded(times: np.ndarray, least: np.ndarray, keep_duration: bool) -> np.nd
     return times[0] + np.concatenate([[0.0], np.cumsum(dt)])
 
 
-def _least(world: np.ndarray) -> np.ndarray:
-    """Per clip frame interval of joint positions ``world`` (F, J, 3), the least time it may
-    take for no joint to move faster than ``SPEED_MARGIN × FASTEST``."""
-    return np.linalg.norm(np.diff(world, axis=0), axis=2).max(axis=1) / (SPEED_MARGIN * FASTEST)
+def _points(motion: Motion, world: tuple[np.ndarray, np.ndarray]) -> np.ndarray:
+    """(F, joints + end sites, 3): every point of the body whose speed is bounded — the End
+    Sites too (fingertips, toes, the top of the head), which a turning hand or foot sweeps
+    faster than its joint; the animation check counts them (``retarget.qa``, pops)."""
+    ends = end_site_positions(motion, world)
+    return np.concatenate([world[0], np.stack(list(ends.values()), axis=1)], axis=1) if ends else world[0]
+
+
+def _least(points: np.ndarray) -> np.ndarray:
+    """Per clip frame interval of the body's points (F, P, 3, :func:`_points`), the least time
+    it may take for none to move faster than ``SPEED_MARGIN × FASTEST``."""
+    return np.linalg.norm(np.diff(points, axis=0), axis=2).max(axis=1) / (SPEED_MARGIN * FASTEST)
 
 
 def _planted_least(motion: Motion) -> np.ndarray:
@@ -550,10 +558,10 @@ def _planted_least(motion: Motion) -> np.ndarray:
 
 def _too_fast(out: Motion, clip_t: np.ndarray, clip_frame_time: float, clip_frames: int) -> np.ndarray:
     """Per clip frame interval, how many times faster than ``SPEED_BOUND × FASTEST`` the
-    fastest joint of the output ``out`` (its frames showing clip times ``clip_t``) moves
-    while it plays that interval (≤ 1 where none does)."""
-    world = forward_kinematics(out)[0]
-    v = np.linalg.norm(np.diff(world, axis=0), axis=2).max(axis=1) / out.frame_time / (SPEED_BOUND * FASTEST)
+    fastest point of the output ``out`` (:func:`_points`; its frames showing clip times
+    ``clip_t``) moves while it plays that interval (≤ 1 where none does)."""
+    points = _points(out, forward_kinematics(out))
+    v = np.linalg.norm(np.diff(points, axis=0), axis=2).max(axis=1) / out.frame_time / (SPEED_BOUND * FASTEST)
     k = np.clip((0.5 * (clip_t[1:] + clip_t[:-1]) / clip_frame_time).astype(int), 0, clip_frames - 2)
     over = np.zeros(clip_frames - 1)
     np.maximum.at(over, k, v)
@@ -604,7 +612,7 @@ def stylize_staged(motion: Motion, stages: Stages, lt: float = 0.0, lw: float = 
     if lw:
         times = _weight_times(world[0], times, lw, motion.frame_time, spans if lt else ())
     times = _smooth_rate(times, motion.frame_time)
-    least = np.maximum(_least(world[0]), _planted_least(motion))
+    least = np.maximum(_least(_points(m, world)), _planted_least(motion))
     for _ in range(5):  # the output measured as it plays — spline, contact IK and all — and slowed where too fast
         times = _bounded(times, least, keep_duration=not lt)
         out, clip_t = _retimed(m, lambda _: times, oversample=_oversample(m))

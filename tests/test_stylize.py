@@ -322,3 +322,17 @@ def test_measures_on_a_known_path():
     a, k, b = burst(speed)
     assert k == 50 and (b - a) * 0.01 == pytest.approx(0.25, abs=0.02)
     assert impact_sharpness(tt, speed) == pytest.approx(16.0, rel=0.05)
+
+
+# Built-in one-shots whose styled hands or feet swept their End Sites (fingertips, toes) past a
+# person's speed — the joints were bounded, the End Sites were not — and popped in the
+# animation check.
+@pytest.mark.parametrize("name,lt,lw", [("Jump", 0.0, -1.0), ("Uppercut Jab", 1.0, 0.0), ("Uppercut Jab", 1.0, -1.0),
+                                        ("Get Angry", 1.0, 0.0), ("Greet", 1.0, 1.0), ("Slapped", 1.0, 0.0)])
+def test_styled_end_sites_move_no_faster_than_a_person(name, lt, lw):
+    from retarget.effort_signature import FASTEST
+    from retarget.qa import check
+
+    clip = CLIPS[name][0]
+    after = check(stylize(clip.motion, clip.stages, lt, lw))
+    assert after.fastest <= FASTEST and not after.pops, (after.fastest, after.pops)
