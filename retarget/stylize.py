@@ -63,6 +63,7 @@ SPEED_MARGIN = 0.8  # retiming keeps every joint under this share of FASTEST bet
 SPEED_BOUND = 0.95  # ... and the output's, measured after every edit (contact IK too), under this share
 PLANTED_SPEED = 0.8 * Limits().slide  # m/s: a flat foot played no faster than its neutral or than this
 TRAVEL_SMOOTHING = 0.5  # s: Weight widens the acting hand or foot's path less the body's travel, low-passed over this
+RISE_MARGIN = 0.9  # both feet flat on the floor, the pelvis rises no faster than this share of the check's limit
 STAGE_EASE = 0.2  # s: with Time, Weight keeps each stage's duration, its correction eased over this much clip time
 WIDEN = 0.5  # Weight scales the acting hand or foot's path by 1 + this × L_w (Strong) or 1/(1 − this × L_w) (Light)
 
@@ -556,6 +557,21 @@ def _planted_least(motion: Motion) -> np.ndarray:
     return np.where(flat[1:] | flat[:-1], least, 0.0).max(axis=1)
 
 
+def _rise_least(motion: Motion, world: np.ndarray) -> np.ndarray:
+    """Per clip frame interval, the least time it may take so that, where both feet stand flat
+    on the floor in the neutral clip, the pelvis of the edited clip (joint positions ``world``)
+    rises no faster than :data:`RISE_MARGIN` × the animation check's limit — or than in the
+    neutral clip, if that rose faster (a jump's push-off): played faster, a body getting up out
+    of a crouch with its feet down is jerked up, which no person does (``retarget.qa``, pops)."""
+    flat, _ = _own_planted_moves(motion)
+    if motion.frames < 2 or flat.shape[1] < 2:
+        return np.zeros(max(motion.frames - 1, 0))
+    both = flat.all(axis=1)
+    rise = np.maximum(np.diff(world[:, pelvis_of(motion.skeleton), 1]), 0.0)
+    least = np.minimum(motion.frame_time, rise / (RISE_MARGIN * Limits().rise))
+    return np.where(both[1:] & both[:-1], least, 0.0)
+
+
 def _too_fast(out: Motion, clip_t: np.ndarray, clip_frame_time: float, clip_frames: int) -> np.ndarray:
     """Per clip frame interval, how many times faster than ``SPEED_BOUND × FASTEST`` the
     fastest point of the output ``out`` (:func:`_points`; its frames showing clip times
@@ -612,7 +628,7 @@ def stylize_staged(motion: Motion, stages: Stages, lt: float = 0.0, lw: float = 
     if lw:
         times = _weight_times(world[0], times, lw, motion.frame_time, spans if lt else ())
     times = _smooth_rate(times, motion.frame_time)
-    least = np.maximum(_least(_points(m, world)), _planted_least(motion))
+    least = np.maximum.reduce([_least(_points(m, world)), _planted_least(motion), _rise_least(motion, world[0])])
     for _ in range(5):  # the output measured as it plays — spline, contact IK and all — and slowed where too fast
         times = _bounded(times, least, keep_duration=not lt)
         out, clip_t = _retimed(m, lambda _: times, oversample=_oversample(m))
