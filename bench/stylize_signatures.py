@@ -16,7 +16,9 @@ calibration of the speed bound).
 Then the four Time × Weight States together (:func:`combined`): in how many clips each
 Factor still shows its signature with the other applied — Time against the neutral clip and
 against Weight alone, Weight against Time alone — on the held-out clips, the tuning clips
-(with ``--tuning``) and ten other one-shots (:data:`OTHER`) that no choice was made on.
+(with ``--tuning``) and ten other one-shots (:data:`OTHER`) that no choice was made on; and
+every built-in one-shot in eight styles through the animation check (:func:`built_ins`: pops,
+feet sliding more than neutral).
 """
 
 from __future__ import annotations
@@ -153,6 +155,37 @@ def combined(paths: list[Path], title: str) -> None:
     print(f"  all three checks: {sum(sum(c[:3]) for c in counts.values())} of {3 * len(COMBINED) * clips}")
 
 
+CYCLES = ("Walk", "Walk Back", "Side Walk Left", "Side Walk Right", "Idle", "Dance")  # styled as cycles, not here
+EIGHT = ((1.0, 0.0), (-1.0, 0.0), (0.0, 1.0), (0.0, -1.0)) + COMBINED
+
+
+def built_ins() -> None:
+    """Every built-in one-shot in the eight Time / Weight styles through the animation check
+    (what ``doodle compile`` plays): how many pop, and how many slide a flat foot more than the
+    neutral clip does, naming them."""
+    from library.manifest import builtin
+    from retarget.clips import load_clips
+
+    popped, slid, total = [], [], 0
+    for name, clips in load_clips(builtin()).items():
+        if name in CYCLES:
+            continue
+        clip = clips[0]
+        for lt, lw in EIGHT:
+            out = stylize(clip.motion, clip.stages, lt, lw)
+            q = check(out)
+            total += 1
+            label = f"{name} {quality(lt, lw) if lt == 0 or lw == 0 else f'{lt:+g}/{lw:+g}'}"
+            if q.pops:
+                popped.append(f"{label} ({len(q.pops)})")
+            more = len(q.sliding) / out.frames - sliding_share(clip.motion, out.frame_time)
+            if more > 1e-9:
+                slid.append(f"{label} (+{100 * more:.1f} %)")
+    print(f"Built-in one-shots, 8 styles each (Time or Weight ±1, and the four States as time/weight): {total} styled")
+    print(f"  with pops: {len(popped)}" + (f" — {', '.join(popped)}" if popped else ""))
+    print(f"  a flat foot sliding more than neutral: {len(slid)}" + (f" — {', '.join(slid)}" if slid else ""))
+
+
 def fastest_real() -> None:
     """The fastest hands and feet (joints, between frames) of the real clips: the bound's calibration."""
     best = {}
@@ -187,6 +220,7 @@ def main(argv: list[str] | None = None) -> None:
         table(held_out_paths(), "Held out: Bandai dataset-1 *_normal_001")
         combined(held_out_paths(), "Held out")
         combined(other_paths(), "Other one-shots (Bandai dataset-2, DeepMimic)")
+        built_ins()
     if "--calibrate" in argv:
         fastest_real()
 
