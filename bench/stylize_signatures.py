@@ -111,39 +111,29 @@ def table(paths: list[Path], title: str) -> tuple[int, int]:
 COMBINED = ((1.0, 1.0), (1.0, -1.0), (-1.0, 1.0), (-1.0, -1.0))
 
 
-def _time_shows(styled, reference, lt: float) -> bool:
-    """Time's signature against ``reference``: Sudden faster and shorter, Sustained the reverse."""
-    return (styled.peak_speed > reference.peak_speed) == (lt > 0) and (styled.execution < reference.execution) == (lt > 0)
-
-
-def _weight_shows(styled, reference, lw: float) -> bool:
-    """Weight's signature against ``reference``: Strong wider and sharper, Light the reverse."""
-    return (styled.extent > reference.extent) == (lw > 0) and (styled.sharpness > reference.sharpness) == (lw > 0)
-
-
 def combined(paths: list[Path], title: str) -> None:
-    """The four Time × Weight States: does each Factor still show its signature with the
-    other applied — Time against the neutral clip and against Weight alone, Weight against
-    Time alone (Laban's Factors are independent: a Sudden Light is as Sudden as a Sudden
-    Strong)? Counts of clips, with pops and feet sliding more than neutral."""
+    """The four Time × Weight States: does each Factor still show its signature
+    (:func:`~retarget.effort_signature.shows`) with the other applied — Time against the
+    neutral clip and against Weight alone, Weight against Time alone (Laban's Factors are
+    independent: a Sudden Light is as Sudden as a Sudden Strong)? Counts of clips, with pops
+    and feet sliding more than neutral."""
     counts = {s: [0, 0, 0, 0] for s in COMBINED}
-    bad = clips = 0
+    clips = 0
     for path in paths:
         if not path.exists():
             continue
         motion = read_bvh(path)
         st = stages(motion)
         neutral = signature(motion)
-        alone = {k: signature(stylize(motion, st, *k), neutral.effector)
-                 for k in ((1.0, 0.0), (-1.0, 0.0), (0.0, 1.0), (0.0, -1.0))}
+        alone = {k: signature(stylize(motion, st, *k), neutral.effector) for k in STYLES}
         clips += 1
         for lt, lw in COMBINED:
             out = stylize(motion, st, lt, lw)
             s = signature(out, neutral.effector)
             c = counts[lt, lw]
-            c[0] += _time_shows(s, neutral, lt)
-            c[1] += _time_shows(s, alone[0.0, lw], lt)
-            c[2] += _weight_shows(s, alone[lt, 0.0], lw)
+            c[0] += shows(neutral, s, quality(lt, 0.0))
+            c[1] += shows(alone[0.0, lw], s, quality(lt, 0.0))
+            c[2] += shows(alone[lt, 0.0], s, quality(0.0, lw))
             q = check(out)
             c[3] += bool(q.pops) or len(q.sliding) / out.frames > sliding_share(motion, out.frame_time) + 1e-9
     print(f"{title}: Time × Weight together, clips of {clips} where each Factor shows its signature")
@@ -156,7 +146,7 @@ def combined(paths: list[Path], title: str) -> None:
 
 
 CYCLES = ("Walk", "Walk Back", "Side Walk Left", "Side Walk Right", "Idle", "Dance")  # styled as cycles, not here
-EIGHT = ((1.0, 0.0), (-1.0, 0.0), (0.0, 1.0), (0.0, -1.0)) + COMBINED
+EIGHT = STYLES + COMBINED
 
 
 def built_ins() -> None:
