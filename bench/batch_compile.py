@@ -21,7 +21,11 @@ see the same load, each beside the target ≥ 1.8× on 2 cores:
   whose workers have each compiled once (``--scheduler`` path), set up as a local one
   (:func:`doodle.app.batch.local_config`: its housekeeping slowed, glibc's malloc untouched).
 
-OpenBLAS is pinned to one thread everywhere (``OPENBLAS_NUM_THREADS=1``, set for the child
+Each timed process is a fresh one started after ``os.sync()`` (the previous run's 100-odd MB
+of output written out before, not by the kernel during, the next run: the batch always
+followed the one-by-one run and paid for its writes), with Python's bytecode cache on as in
+an installed program (a private ``PYTHONPYCACHEPREFIX``, filled untimed first, as
+:mod:`bench.startup` does). OpenBLAS is pinned to one thread everywhere (``OPENBLAS_NUM_THREADS=1``, set for the child
 processes and Dask's workers), so that two workers do not fight over two cores. The
 machine's load average is printed before and after: other work on it takes cores from
 both sides, and most from the parallel one. The batch's outputs are checked to be
@@ -108,13 +112,28 @@ def pooled(folder: Path, out: Path) -> None:
         pool.starmap(_compile_quietly, [(f, out) for f in files], chunksize=1)
 
 
+# what the timed children import, imported once untimed so that their bytecode is written
+PRIME = ("import dask.distributed, doodle.app.cli.main, doodle.app.batch, bench.batch_compile; "
+         "from doodle.app.cli.compile import import_compile_modules; import_compile_modules()")
+_BYTECODE: list[Path] = []  # the children's bytecode folder (PYTHONPYCACHEPREFIX), once made
+
+
 def _env() -> dict:
-    return dict(os.environ, OPENBLAS_NUM_THREADS="1",
-                PYTHONPATH=os.pathsep.join(filter(None, [str(ROOT), os.environ.get("PYTHONPATH")])))
+    """The children's environment: OpenBLAS on one thread, this checkout importable, and
+    Python's bytecode cache on in a private folder (as in an installed program, and as
+    :mod:`bench.startup` measures; with ``PYTHONDONTWRITEBYTECODE=1`` and no ``__pycache__`` in
+    the checkout every run would compile our modules from source, a fixed cost on both sides)."""
+    env = dict(os.environ, OPENBLAS_NUM_THREADS="1",
+               PYTHONPATH=os.pathsep.join(filter(None, [str(ROOT), os.environ.get("PYTHONPATH")])))
+    if _BYTECODE:
+        env.pop("PYTHONDONTWRITEBYTECODE", None)
+        env["PYTHONPYCACHEPREFIX"] = str(_BYTECODE[0])
+    return env
 
 
 def _child(argv: list[str]) -> tuple[float, str]:
     """Wall seconds of a child Python process running ``argv``, and what it printed."""
+    os.sync()  # the previous run's output written out now, not by the kernel during this run
     start = time.perf_counter()
     done = subprocess.run([sys.executable, *argv], cwd=ROOT, env=_env(), capture_output=True, text=True)
     seconds = time.perf_counter() - start
@@ -222,6 +241,8 @@ def main(argv: list[str] | None = None) -> int:
     with tempfile.TemporaryDirectory() as tmp:
         takes, out = Path(tmp) / "takes", Path(tmp) / "out"
         _, what = make_inputs(takes, args.files, args.blocks)
+        _BYTECODE[:] = [Path(tmp) / "bytecode"]
+        _child(["-c", PRIME])  # bytecode written, untimed
         print(f"Batch compile: {args.files} {what}, one after another in one process vs a {WORKERS}-worker local "
               f"Dask cluster (median of {args.runs}; {os.cpu_count()} CPUs, OPENBLAS_NUM_THREADS=1)")
         print(f"  before: {_load()}")
