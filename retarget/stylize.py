@@ -66,6 +66,7 @@ TRAVEL_SMOOTHING = 0.5  # s: Weight widens the acting hand or foot's path less t
 RISE_MARGIN = 0.9  # both feet flat on the floor, the pelvis rises no faster than this share of the check's limit
 STAGE_EASE = 0.2  # s: with Time, Weight keeps each stage's duration, its correction eased over this much clip time
 WIDEN = 0.5  # Weight scales the acting hand or foot's path by 1 + this × L_w (Strong) or 1/(1 − this × L_w) (Light)
+FOOT_CLEAR = 0.1  # m: an acting foot's path widens sideways only as it lifts this far off its floor
 
 
 def _bones(motion: Motion, mode: str) -> np.ndarray:
@@ -438,7 +439,14 @@ def _widen(motion: Motion, effector: int, k: float, neutral: np.ndarray) -> Moti
     limb from where ``motion`` puts its shoulder or hip (as far as the limb reaches). The
     neutral's path, not ``motion``'s: the partial motion scale before this turns the chest
     further, which swings a straight arm sideways (a punch's reach shrinks); the world's, not
-    the shoulder's: a strike's sway and lean into it are part of the movement that widens."""
+    the shoulder's: a strike's sway and lean into it are part of the movement that widens.
+
+    A foot (a kick) widens about its floor, not its mean: its height above its lowest point is
+    scaled by ``k`` (a Strong kick goes higher, a Light one lower), and sideways its path widens
+    only as it lifts off (fully :data:`FOOT_CLEAR` above the floor). Scaled about the mean, a
+    foot below it is pushed into the floor, where it dragged through the kick's wind-up and
+    then snapped up (Crescent Kick Strong: held at the floor while the neutral lifted 0.25 m,
+    then up at 9 m/s)."""
     parents = motion.skeleton.parents
     mid = int(parents[effector])
     top = int(parents[mid]) if mid >= 0 else -1
@@ -454,6 +462,11 @@ def _widen(motion: Motion, effector: int, k: float, neutral: np.ndarray) -> Moti
     centre = rel.mean(axis=0)
     moved = gaussian_filter1d(p[:, pelvis], sigma, axis=0, mode="nearest") * [1.0, 0.0, 1.0]
     target = moved + centre + k * (rel - centre)
+    if effector in _leg_bones(motion):
+        floor = float(rel[:, 1].min())
+        lift = np.clip((rel[:, 1] - floor) / FOOT_CLEAR, 0.0, 1.0)
+        side = moved + rel + ((k - 1.0) * lift * lift * (3.0 - 2.0 * lift))[:, None] * (rel - centre)
+        target = np.concatenate([side[:, :1], (floor + k * (rel[:, 1] - floor))[:, None], side[:, 2:]], axis=1)
     target[:, 1] = np.maximum(target[:, 1], min(p[:, effector, 1].min(), target[:, 1].max()))  # a foot no lower than it went
     return two_bone_ik(motion, top, mid, effector, target, np.ones(motion.frames), world=world)
 

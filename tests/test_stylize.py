@@ -333,3 +333,25 @@ def test_styled_built_ins_do_not_pop(name, lt, lw):
     clip = CLIPS[name][0]
     after = check(stylize(clip.motion, clip.stages, lt, lw))
     assert after.fastest <= FASTEST and not after.pops, (after.fastest, after.pops)
+
+
+# Kicks whose styled kicking foot dragged along the floor: Weight widened the foot's path about
+# its mean height, so the foot, below the mean through the wind-up, was pushed into the floor
+# and held there while the neutral lifted it (then snapped up at 9 m/s).
+@pytest.mark.parametrize("name,lt,lw", [("Crescent Kick", 0.0, 1.0), ("Kick", -1.0, -1.0)])
+def test_a_styled_kick_lifts_its_foot(name, lt, lw):
+    from retarget.analysis import guess_roles
+    from retarget.qa import check
+
+    clip = CLIPS[name][0]
+    out = stylize(clip.motion, clip.stages, lt, lw)
+    assert len(check(out).sliding) / out.frames <= sliding_share(clip.motion, out.frame_time) + 1e-9
+    foot = guess_roles(out.skeleton)["right_foot"]  # the kicking foot
+    neutral = forward_kinematics(clip.motion)[0][:, foot, 1]
+    styled = forward_kinematics(out)[0][:, foot, 1]
+
+    def clear(height):  # when the foot first stands 5 cm above its floor, as a share of the clip
+        return np.argmax(height - neutral.min() > 0.05) / (len(height) - 1)
+
+    assert styled.max() - neutral.min() > 0.3  # the kick happens
+    assert clear(styled) <= clear(neutral) + 0.1
