@@ -44,10 +44,13 @@ def test_the_main_example_passes_the_animation_check(scene):
     assert c.fastest < 15.0 and not c.sliding and not c.hovering
 
 
-@pytest.mark.parametrize("style", ["tempo×1.6", "size×0.5", "flow", "wobble 5°"])
+@pytest.mark.parametrize("style", ["tempo×1.6", "size×0.5", "flow", "wobble 5°",
+                                   "size×0.5 tempo×0.6 pause 0.15 s 144 Hz tilt 20° wobble 2° bob 4 mm arc 0"])
 def test_the_main_example_performed_by_other_styles_passes(style):
     """Performers the constants were not chosen on: slow and small ones (a jump in half a
-    second borrows time from the stands around it), one without pauses, a wobbly hand."""
+    second borrows time from the stands around it), one without pauses, a wobbly hand, and a
+    quick small one with short pauses (its jump, in 0.6 s, has too little time around it for
+    the flight at its own pace: the arms swung at 18 m/s)."""
     from doodle.synth.performers import MAIN_EXAMPLE, perform, style_grid
 
     chosen = next(s for s in style_grid() if s.label() == style)
@@ -110,6 +113,10 @@ def test_pacing_keeps_joints_under_the_limit_and_the_flight_at_its_own_pace():
     assert np.allclose(np.diff(u)[inside] * duration, np.diff(knots)[inside])  # the flight in real time
     rate = np.diff(knots) / (np.diff(u) * duration)  # clip seconds per second played
     assert rate.max() <= QUICKEST + 1e-6  # standing up from the landing is never a pop
+    short = 0.7  # the flight (0.45 s) and the rest at the joints' limit take 0.88 s: the flight plays
+    # quicker, the joints kept under the limit
+    u, knots = paced(m, 0.0, None, short, 11.0, flight)
+    assert _peak(m, u, knots, short) < 12.0 < _peak(m, np.array([0.0, 1.0]), np.array([0.0, end]), short)
     slow = paced(m, 0.0, None, 2 * end)  # never slowed below its own pace for speed
     assert np.allclose(slow[0], [0.0, 1.0])
 
