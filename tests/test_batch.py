@@ -191,8 +191,11 @@ def test_two_inputs_of_one_stem_are_refused_naming_both(tmp_path, capsys):
     (["--workers", "2", "--scheduler", "tcp://h:1"], "compile: give --workers N or --scheduler ADDRESS, not both"),
     (["--time", "2"], "--time must be between -1 and 1, not 2"),
     (["--effort-model", "nowhere.npz"], "nowhere.npz: no such model file"),
+    (["--effort-model", "junk.npz"], "junk.npz: not a valid .npz archive (not a zip archive)"),
 ])
-def test_options_every_file_would_fail_on_are_refused_once(argv, said, tmp_path, capsys):
+def test_options_every_file_would_fail_on_are_refused_once(argv, said, tmp_path, capsys, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    Path("junk.npz").write_text("junk")
     code = main(["compile", "a.doodle", "b.doodle", "-o", str(tmp_path / "out"), *argv])
     assert (code, capsys.readouterr().err) == (1, f"doodle: error: {said}\n")
 

@@ -161,8 +161,8 @@ def compiled_counts(file, output, args) -> tuple[int, int]:
 
 def check_batch_options(args) -> None:
     """What every file of a batch would fail on alike, checked once before any worker starts:
-    the numbers, the calibration, terrain, edits, library and that the effort model is there
-    (read by the workers: loading it here would cost this process a second and a half)."""
+    the numbers, the calibration, terrain, edits, library and the effort model (read whole:
+    a corrupt model fails here, once, not in every file's row)."""
     from doodle.app.cli.options import library_of
     from doodle.app.pipeline import read_edits
     from retarget.terrain import parse_terrain
@@ -173,8 +173,10 @@ def check_batch_options(args) -> None:
         parse_terrain(args.terrain)
     if args.edits:
         read_edits(args.edits)
-    if args.effort_model and not args.no_effort and not Path(args.effort_model).exists():
-        raise DoodleError(f"{args.effort_model}: no such model file")
+    if not args.no_effort:
+        from laban.models import load as load_effort_model
+
+        load_effort_model(args.effort_model)
     library_of(args)
 
 
