@@ -22,6 +22,8 @@ import numpy as np
 
 from doodle.core import quat
 from doodle.core.filters import gaussian_filter1d
+from retarget.analysis import pelvis_of
+from retarget.qa import Limits, planted_moves
 from retarget.skeleton import Motion, Skeleton, end_site_positions, forward_kinematics, per_motion
 from retarget.trajectory import Span
 
@@ -160,6 +162,22 @@ def stride_scale(motion: Motion, pelvis: int, speed: float) -> float:
 FASTEST = 11.0  # m/s: a retimed clip's joints move no faster (real motion capture: ≤ 12.2 m/s)
 QUICKEST = 2.0  # … and no part of it plays more than this much faster than the clip's own pace: a slow
 # part is slow because of the body's weight too (standing up from a landing crouch), not only a hold
+RISE_MARGIN = 0.9  # both feet flat on the floor, the pelvis rises no faster than this share of the check's limit
+
+
+def rise_least(flat: np.ndarray, pelvis_y: np.ndarray, frame_time: float) -> np.ndarray:
+    """Per frame interval, the least time it may take so that, where both feet stand flat on
+    the floor (``flat``: (F, feet), ``retarget.qa.planted_moves``), the pelvis (heights
+    ``pelvis_y``) rises no faster than :data:`RISE_MARGIN` × the animation check's limit — or
+    than over ``frame_time``, the interval's own time, if it rose faster (a jump's push-off):
+    played faster, a body getting up out of a crouch with its feet down is jerked up, which no
+    person does (``retarget.qa``, pops)."""
+    if len(pelvis_y) < 2 or flat.ndim < 2 or flat.shape[1] < 2:
+        return np.zeros(max(len(pelvis_y) - 1, 0))
+    both = flat.all(axis=1)
+    rise = np.maximum(np.diff(pelvis_y), 0.0)
+    least = np.minimum(frame_time, rise / (RISE_MARGIN * Limits().rise))
+    return np.where(both[1:] & both[:-1], least, 0.0)
 
 
 def _limits(motion: Motion, clip_in: float, clip_out: float | None, limit: float, natural: tuple | None = None,
@@ -176,6 +194,7 @@ def _limits(motion: Motion, clip_in: float, clip_out: float | None, limit: float
     step = np.diff(knots)
     speed = _frame_speeds(motion)[f0:f1]
     least = step * np.clip(speed / limit, 1.0 / quickest, 1.0)  # never slower than the clip's own pace
+    least = np.maximum(least, step * _rise_share(motion)[f0:f1])  # nor jerked up out of a crouch
     if natural is not None:  # a flight lasts as long as it does
         inside = (knots[1:] > natural[0] + 1e-9) & (knots[:-1] < natural[1] - 1e-9)
         least[inside] = step[inside]
@@ -190,6 +209,15 @@ def _frame_speeds(motion: Motion) -> np.ndarray:
     ends = end_site_positions(motion, world)
     positions = np.concatenate([world[0]] + [e[:, None] for e in ends.values()], axis=1)
     return np.linalg.norm(np.diff(positions, axis=0), axis=2).max(axis=1) / motion.frame_time
+
+
+@per_motion
+def _rise_share(motion: Motion) -> np.ndarray:
+    """(F − 1,) the least share of its own time each frame interval of a clip may be played
+    in (:func:`rise_least`: the pelvis getting up with both feet flat; 0 elsewhere)."""
+    world = forward_kinematics(motion)
+    flat, _ = planted_moves(motion, world)
+    return rise_least(flat, world[0][:, pelvis_of(motion.skeleton), 1], motion.frame_time) / motion.frame_time
 
 
 def shortest(motion: Motion, clip_in: float = 0.0, clip_out: float | None = None, limit: float = FASTEST,

@@ -47,6 +47,7 @@ from retarget.analysis import Stages, foot_contacts, guess_roles, partition, pel
 from retarget.effort_signature import FASTEST, RATE, burst, most_moving, speed_profile
 from retarget.feet import two_bone_ik
 from retarget.qa import Limits, check, planted_moves
+from retarget.sequence import rise_least
 from retarget.skeleton import Motion, end_site_positions, forward_kinematics, per_motion
 
 ALPHA_WEIGHT = 1.5
@@ -63,10 +64,11 @@ SPEED_MARGIN = 0.8  # retiming keeps every joint under this share of FASTEST bet
 SPEED_BOUND = 0.95  # ... and the output's, measured after every edit (contact IK too), under this share
 PLANTED_SPEED = 0.8 * Limits().slide  # m/s: a flat foot played no faster than its neutral or than this
 TRAVEL_SMOOTHING = 0.5  # s: Weight widens the acting hand or foot's path less the body's travel, low-passed over this
-RISE_MARGIN = 0.9  # both feet flat on the floor, the pelvis rises no faster than this share of the check's limit
 STAGE_EASE = 0.2  # s: with Time, Weight keeps each stage's duration, its correction eased over this much clip time
 WIDEN = 0.5  # Weight scales the acting hand or foot's path by 1 + this × L_w (Strong) or 1/(1 − this × L_w) (Light)
 FOOT_CLEAR = 0.1  # m: an acting foot's path widens sideways only as it lifts this far off its floor
+JUMP_CLEAR = 0.1  # m: in a flight both soles rise at least this far off the floor (less: a shuffle, a heel raised)
+FLIGHT_EASE = 0.1  # s: around a flight, the playback may slow by one more frame time per this much clip time
 
 
 def _bones(motion: Motion, mode: str) -> np.ndarray:
@@ -526,15 +528,18 @@ def _weight_times(world: np.ndarray, times: np.ndarray, lw: float, frame_time: f
     return times[0] + np.concatenate([[0.0], np.cumsum(dt_out)])
 
 
-def _bounded(times: np.ndarray, least: np.ndarray, keep_duration: bool) -> np.ndarray:
+def _bounded(times: np.ndarray, least: np.ndarray, keep_duration: bool,
+             most: np.ndarray | None = None) -> np.ndarray:
     """The time map with each clip frame interval lasting at least ``least`` (s) — so no
     joint outruns the bound there (:func:`_least`) —: the frames it would play too fast
-    take longer (``keep_duration``: the others shorter, so the clip keeps its length)."""
+    take longer (``keep_duration``: the others shorter, so the clip keeps its length); and at
+    most ``most`` (s; a flight at its own pace, :func:`_flight`) unless ``least`` says more."""
     dt = np.maximum(np.diff(times), 1e-9)
     total = dt.sum()
-    for _ in range(4):
-        dt = np.maximum(dt, least)
-        free = dt > least * (1 + 1e-6)
+    hi = np.full(len(dt), np.inf) if most is None else np.maximum(most, least)
+    for _ in range(6):
+        dt = np.clip(dt, least, hi)
+        free = (dt > least * (1 + 1e-6)) & (dt < hi * (1 - 1e-6))
         if not keep_duration or not free.any():
             break
         spare = total - dt[~free].sum()
@@ -542,6 +547,45 @@ def _bounded(times: np.ndarray, least: np.ndarray, keep_duration: bool) -> np.nd
             break
         dt[free] *= spare / dt[free].sum()
     return times[0] + np.concatenate([[0.0], np.cumsum(dt)])
+
+
+@per_motion
+def _flight(motion: Motion) -> np.ndarray:
+    """(F − 1,) the clip frame intervals in the air: both soles off the clip's floor at either
+    end, as the animation check reads it, in a run where they rise :data:`JUMP_CLEAR` or more
+    (not a DeepMimic punch's shuffle). Time and Weight play them no slower than the clip's own
+    pace: how long a body stays up is gravity's, not the mover's — slowed, a Sustained or Light
+    jump, flip or back flip hung in the air (soles up for longer than any real jump: 11 of 200
+    styled built-in one-shots failed the animation check so). Sudden may still play a flight
+    quicker (a snappier, lower-looking jump; kept so that a jumping kick shows its Time)."""
+    roles = guess_roles(motion.skeleton)
+    feet = [roles[k] for k in ("left_foot", "right_foot") if k in roles]
+    if len(feet) < 2 or motion.frames < 2:
+        return np.zeros(max(motion.frames - 1, 0), dtype=bool)
+    world = forward_kinematics(motion)
+    ends = end_site_positions(motion, world)
+    soles = np.array([np.min([world[0][:, j, 1] for j in motion.skeleton.subtree(a)]
+                             + [ends[j][:, 1] for j in motion.skeleton.subtree(a) if j in ends], axis=0)
+                      for a in feet])  # (feet, F): each foot's lowest point
+    lowest = soles.min(axis=0) - np.percentile(soles.min(axis=0), 2)
+    up = np.zeros(motion.frames, dtype=bool)
+    for a, b in _runs(lowest > Limits().hover):  # off the floor as the check reads it, and a jump's height
+        up[a - 1:b + 1] = lowest[a:b].max() >= JUMP_CLEAR  # with the take-off and the landing
+    return up[1:] | up[:-1]
+
+
+def _flight_most(air: np.ndarray, frame_time: float) -> np.ndarray:
+    """Per clip frame interval, the longest it may play: a flight (``air``, :func:`_flight`)
+    at its own pace, the intervals around it slower by at most one more frame time per
+    :data:`FLIGHT_EASE` of clip time away from it — no step in the playback rate where a
+    slowed take-off meets the flight (a jerk)."""
+    if not air.any():
+        return np.full(len(air), np.inf)
+    inside = np.flatnonzero(air)
+    k = np.arange(len(air))
+    at = np.clip(np.searchsorted(inside, k), 1, len(inside) - 1) if len(inside) > 1 else np.zeros(len(air), int)
+    away = np.minimum(np.abs(k - inside[at]), np.abs(k - inside[np.maximum(at - 1, 0)])) * frame_time
+    return frame_time * (1.0 + away / FLIGHT_EASE)
 
 
 def _points(motion: Motion, world: tuple[np.ndarray, np.ndarray]) -> np.ndarray:
@@ -573,16 +617,9 @@ def _planted_least(motion: Motion) -> np.ndarray:
 def _rise_least(motion: Motion, world: np.ndarray) -> np.ndarray:
     """Per clip frame interval, the least time it may take so that, where both feet stand flat
     on the floor in the neutral clip, the pelvis of the edited clip (joint positions ``world``)
-    rises no faster than :data:`RISE_MARGIN` × the animation check's limit — or than in the
-    neutral clip, if that rose faster (a jump's push-off): played faster, a body getting up out
-    of a crouch with its feet down is jerked up, which no person does (``retarget.qa``, pops)."""
-    flat, _ = _own_planted_moves(motion)
-    if motion.frames < 2 or flat.shape[1] < 2:
-        return np.zeros(max(motion.frames - 1, 0))
-    both = flat.all(axis=1)
-    rise = np.maximum(np.diff(world[:, pelvis_of(motion.skeleton), 1]), 0.0)
-    least = np.minimum(motion.frame_time, rise / (RISE_MARGIN * Limits().rise))
-    return np.where(both[1:] & both[:-1], least, 0.0)
+    rises no faster than ``retarget.sequence.RISE_MARGIN`` × the animation check's limit, or
+    than in the neutral clip (:func:`retarget.sequence.rise_least`)."""
+    return rise_least(_own_planted_moves(motion)[0], world[:, pelvis_of(motion.skeleton), 1], motion.frame_time)
 
 
 def _too_fast(out: Motion, clip_t: np.ndarray, clip_frame_time: float, clip_frames: int) -> np.ndarray:
@@ -642,8 +679,9 @@ def stylize_staged(motion: Motion, stages: Stages, lt: float = 0.0, lw: float = 
         times = _weight_times(world[0], times, lw, motion.frame_time, spans if lt else ())
     times = _smooth_rate(times, motion.frame_time)
     least = np.maximum.reduce([_least(_points(m, world)), _planted_least(motion), _rise_least(motion, world[0])])
+    most = _flight_most(_flight(motion), motion.frame_time)
     for _ in range(5):  # the output measured as it plays — spline, contact IK and all — and slowed where too fast
-        times = _bounded(times, least, keep_duration=not lt)
+        times = _bounded(times, least, keep_duration=not lt, most=most)
         out, clip_t = _retimed(m, lambda _: times, oversample=_oversample(m))
         out = _restore_contacts(motion, out, clip_frames=clip_t / motion.frame_time)
         over = _too_fast(out, clip_t, motion.frame_time, motion.frames)

@@ -200,3 +200,14 @@ def test_a_body_jerked_up_from_its_landing_crouch_is_a_pop_and_a_take_off_is_not
     c = check(popped, ground=0.0)
     assert c.fastest < c.limits.pop  # no joint too fast …
     assert not c.passes and c.pops and min(c.pops) > crouch  # … yet the stand-up is a pop
+
+
+def test_a_pick_up_performed_at_a_pace_is_not_jerked_up():
+    """A pick up performed by the synthetic performer, read Sudden: its segment is shorter than
+    the styled clip, and pacing squeezed the rise out of the crouch (both feet flat) to 2.9 m/s —
+    a pop; the pacing now bounds that rise as the stylisation does."""
+    from doodle.synth.performers import perform
+
+    doodle, _ = perform(("Idle", "Pick up", "Idle"), seed=21)
+    _, checks = _checked(doodle, effort_model=_effort())
+    assert checks["c0"].passes and not checks["c0"].pops, checks["c0"].summary()

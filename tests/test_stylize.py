@@ -79,9 +79,14 @@ def execution_jerk(motion, joint, st):
 # The strikes and other one-shots with an impulsive execution. Gentle clips (Raise Arms,
 # Pick up, Greet, Despair, Kiss, Dance, Uppercut Jab…) keep Sudden's signature but not
 # Sustained's: eq. 5.3 plays Sustained anticipation twice as fast and starts the execution
-# fast then decelerates, which raises their (tiny) execution jerk.
+# fast then decelerates, which raises their (tiny) execution jerk. The Flip's execution is its
+# flight, which Sustained does not slow (gravity's, not the mover's): its peak jerk stays the
+# neutral's; only its shorter, jerkier Sudden execution is checked.
 IMPULSIVE = ["Punch", "Kick", "Throw", "Stomp", "Crescent Kick", "Block", "Jump", "Flip", "Duck", "Stop",
              "Dodge", "Cast Fireball", "Yell", "Slap"]
+
+
+AIRBORNE = ("Flip",)
 
 
 @pytest.mark.parametrize("name", IMPULSIVE)
@@ -95,7 +100,8 @@ def test_sudden_and_sustained(name):
     assert (s_st.execution - s_st.anticipation) * sudden.frame_time < execution * ratio  # shorter
     assert (u_st.execution - u_st.anticipation) * sustained.frame_time > execution * ratio  # longer
     neutral = execution_jerk(clip.motion, j, clip.stages)
-    assert execution_jerk(sudden, j, s_st) > neutral > execution_jerk(sustained, j, u_st)
+    assert execution_jerk(sudden, j, s_st) > neutral
+    assert neutral > execution_jerk(sustained, j, u_st) or name in AIRBORNE
 
 
 @pytest.mark.xfail(strict=True, reason="fails on the built-in Kick (not yet understood)")
@@ -355,3 +361,15 @@ def test_a_styled_kick_lifts_its_foot(name, lt, lw):
 
     assert styled.max() - neutral.min() > 0.3  # the kick happens
     assert clear(styled) <= clear(neutral) + 0.1
+
+
+# Slowed by Sustained or Light, the flight of a jump, flip or back flip hung in the air for longer
+# than any real jump (the animation check's hovering); how long a body stays up is gravity's.
+@pytest.mark.parametrize("name,lt,lw", [("Jump", -1.0, 0.0), ("Jump", -1.0, -1.0), ("Flip", -1.0, 0.0),
+                                        ("Flip", 0.0, -1.0), ("Back Flip", -1.0, 0.0), ("Back Flip", 0.0, -1.0)])
+def test_a_styled_flight_does_not_hang_in_the_air(name, lt, lw):
+    from retarget.qa import check
+
+    clip = CLIPS[name][0]
+    after = check(stylize(clip.motion, clip.stages, lt, lw))
+    assert not after.hovering and after.passes, after.summary()
