@@ -64,6 +64,7 @@ SPEED_MARGIN = 0.8  # retiming keeps every joint under this share of FASTEST bet
 SPEED_BOUND = 0.95  # ... and the output's, measured after every edit (contact IK too), under this share
 PLANTED_SPEED = 0.8 * Limits().slide  # m/s: a flat foot played no faster than its neutral or than this
 TRAVEL_SMOOTHING = 0.5  # s: Weight widens the acting hand or foot's path less the body's travel, low-passed over this
+END_REST = 0.1  # s: a burst ending this close to the clip's end is its return to rest, not its execution
 STAGE_EASE = 0.2  # s: with Time, Weight keeps each stage's duration, its correction eased over this much clip time
 WIDEN = 0.5  # Weight scales the acting hand or foot's path by 1 + this × L_w (Strong) or 1/(1 − this × L_w) (Light)
 FOOT_CLEAR = 0.1  # m: an acting foot's path widens sideways only as it lifts this far off its floor
@@ -360,12 +361,17 @@ def _execution(motion: Motion, stages: Stages, world: np.ndarray | None = None) 
     """(anticipation start, execution start, execution end) in clip frames. The execution is
     the burst of the clip's most moving hand or foot (:func:`~retarget.effort_signature.most_moving`)
     around its peak speed, where its speed is at least :data:`BURST_SHARE` of the peak — the
-    stages may put it elsewhere, the effector does not. The anticipation ends where the
+    stages may put it elsewhere, the effector does not —, unless that burst runs into the
+    clip's last :data:`END_REST` seconds: that is the return to rest, which blends into the
+    next action (a Dance's arms coming down, made Sudden, whipped into it at 16 m/s); then
+    the burst before it. The anticipation ends where the
     execution starts, and starts where the stages say if their anticipation ends within one
     execution's length of it, else one execution's length earlier."""
     j = most_moving(motion, world)
     tt, v = speed_profile(motion, j, world)
     s, _, e = burst(v, BURST_SHARE)
+    if e >= len(v) - END_REST * RATE and v[:s].max(initial=0.0) > 0:  # the clip's return to rest: not it
+        s, _, e = burst(np.where(np.arange(len(v)) < s, v, 0.0), BURST_SHARE)
     start, end = (int(np.clip(round(x / RATE / motion.frame_time), 0, motion.frames - 1)) for x in (s, e))
     end = max(end, start + 2)
     span = end - start
