@@ -145,20 +145,22 @@ def combined(paths: list[Path], title: str) -> None:
     print(f"  all three checks: {sum(sum(c[:3]) for c in counts.values())} of {3 * len(COMBINED) * clips}")
 
 
-CYCLES = ("Walk", "Walk Back", "Side Walk Left", "Side Walk Right", "Idle", "Dance")  # styled as cycles, not here
 EIGHT = STYLES + COMBINED
 
 
 def built_ins() -> None:
     """Every built-in one-shot in the eight Time / Weight styles through the animation check
-    (what ``doodle compile`` plays): how many pop, and how many slide a flat foot more than the
-    neutral clip does, naming them."""
+    (what ``doodle compile`` plays): how many pop, how many slide a flat foot more than the
+    neutral clip does, and how many fail the check otherwise (a foot held still in the air, a
+    flight hanging, sinking), naming them. The library's cyclic actions are styled as cycles
+    and left out."""
     from library.manifest import builtin
     from retarget.clips import load_clips
 
-    popped, slid, total = [], [], 0
+    popped, slid, failed, total = [], [], [], 0
+    cycles = {a.name for a in builtin().actions if a.cyclic}  # styled as cycles (Weight's swing), not here
     for name, clips in load_clips(builtin()).items():
-        if name in CYCLES:
+        if name in cycles:
             continue
         clip = clips[0]
         for lt, lw in EIGHT:
@@ -169,11 +171,15 @@ def built_ins() -> None:
             if q.pops:
                 popped.append(f"{label} ({len(q.pops)})")
             more = len(q.sliding) / out.frames - sliding_share(clip.motion, out.frame_time)
+            if not q.passes and not q.pops and not len(q.sliding):
+                failed.append(f"{label} ({'hovering' if len(q.hovering) else 'sinking' if len(q.sinking) else 'other'})")
             if more > 1e-9:
                 slid.append(f"{label} (+{100 * more:.1f} %)")
     print(f"Built-in one-shots, 8 styles each (Time or Weight ±1, and the four States as time/weight): {total} styled")
     print(f"  with pops: {len(popped)}" + (f" — {', '.join(popped)}" if popped else ""))
     print(f"  a flat foot sliding more than neutral: {len(slid)}" + (f" — {', '.join(slid)}" if slid else ""))
+    print(f"  failing the animation check otherwise (feet held up in the air or hanging, sinking): {len(failed)}"
+          + (f" — {', '.join(failed)}" if failed else ""))
 
 
 def fastest_real() -> None:
