@@ -69,6 +69,7 @@ STAGE_EASE = 0.2  # s: with Time, Weight keeps each stage's duration, its correc
 WIDEN = 0.5  # Weight scales the acting hand or foot's path by 1 + this × L_w (Strong) or 1/(1 − this × L_w) (Light)
 FOOT_CLEAR = 0.1  # m: an acting foot's path widens sideways only as it lifts this far off its floor
 JUMP_CLEAR = 0.1  # m: in a flight both soles rise at least this far off the floor (less: a shuffle, a heel raised)
+JUMP_AIR = 0.2  # s: ... for at least this long (less: a running stride's flight phase, 0.1-0.15 s)
 FLIGHT_EASE = 0.1  # s: around a flight, the playback may slow by one more frame time per this much clip time
 
 
@@ -576,7 +577,7 @@ def _flight(motion: Motion) -> np.ndarray:
     lowest = soles.min(axis=0) - np.percentile(soles.min(axis=0), 2)
     up = np.zeros(motion.frames, dtype=bool)
     for a, b in _runs(lowest > Limits().hover):  # off the floor as the check reads it, and a jump's height
-        up[a - 1:b + 1] = lowest[a:b].max() >= JUMP_CLEAR  # with the take-off and the landing
+        up[max(a - 1, 0):b + 1] = lowest[a:b].max() >= JUMP_CLEAR and (b - a) * motion.frame_time >= JUMP_AIR
     return up[1:] | up[:-1]
 
 
