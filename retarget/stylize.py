@@ -560,7 +560,8 @@ def _bounded(times: np.ndarray, least: np.ndarray, keep_duration: bool,
 def _flight(motion: Motion) -> np.ndarray:
     """(F − 1,) the clip frame intervals in the air: both soles off the clip's floor at either
     end, as the animation check reads it, in a run where they rise :data:`JUMP_CLEAR` or more
-    (not a DeepMimic punch's shuffle). Time and Weight play them no slower than the clip's own
+    (not a DeepMimic punch's shuffle) for :data:`JUMP_AIR` or longer (not a running stride's
+    flight phase), with its take-off and landing. Time and Weight play them no slower than the clip's own
     pace: how long a body stays up is gravity's, not the mover's — slowed, a Sustained or Light
     jump, flip or back flip hung in the air (soles up for longer than any real jump: 11 of 200
     styled built-in one-shots failed the animation check so). Sudden may still play a flight
