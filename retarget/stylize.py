@@ -451,8 +451,9 @@ def _widen(motion: Motion, effector: int, k: float, neutral: np.ndarray) -> Moti
     the shoulder's: a strike's sway and lean into it are part of the movement that widens.
 
     A foot (a kick) widens about its floor, not its mean: its height above its lowest point is
-    scaled by ``k`` (a Strong kick goes higher, a Light one lower), and sideways its path widens
-    only as it lifts off (fully :data:`FOOT_CLEAR` above the floor). Scaled about the mean, a
+    scaled by ``k`` for Strong (a higher kick) and kept for Light (lowered, a foot whose toes
+    point down cut through the floor, and the standing foot then read as hovering), and
+    sideways its path widens or narrows only as it lifts off (fully :data:`FOOT_CLEAR` above the floor). Scaled about the mean, a
     foot below it is pushed into the floor, where it dragged through the kick's wind-up and
     then snapped up (Crescent Kick Strong: held at the floor while the neutral lifted 0.25 m,
     then up at 9 m/s)."""
@@ -475,9 +476,42 @@ def _widen(motion: Motion, effector: int, k: float, neutral: np.ndarray) -> Moti
         floor = float(rel[:, 1].min())
         lift = np.clip((rel[:, 1] - floor) / FOOT_CLEAR, 0.0, 1.0)
         side = moved + rel + ((k - 1.0) * lift * lift * (3.0 - 2.0 * lift))[:, None] * (rel - centre)
-        target = np.concatenate([side[:, :1], (floor + k * (rel[:, 1] - floor))[:, None], side[:, 2:]], axis=1)
+        up = floor + max(k, 1.0) * (rel[:, 1] - floor)  # lowered, a foot pointing its toes down cut the floor
+        target = np.concatenate([side[:, :1], up[:, None], side[:, 2:]], axis=1)
     target[:, 1] = np.maximum(target[:, 1], min(p[:, effector, 1].min(), target[:, 1].max()))  # a foot no lower than it went
     return two_bone_ik(motion, top, mid, effector, target, np.ones(motion.frames), world=world)
+
+
+def _sole(motion: Motion, world: tuple[np.ndarray, np.ndarray], ankle: int) -> np.ndarray:
+    """(F,) the lowest point of a foot: its ankle, toes and their End Sites."""
+    ends = end_site_positions(motion, world)
+    below = motion.skeleton.subtree(ankle)
+    return np.min([world[0][:, j, 1] for j in below] + [ends[j][:, 1] for j in below if j in ends], axis=0)
+
+
+def _above_floor(motion: Motion, neutral: tuple[np.ndarray, np.ndarray], effector: int) -> Motion:
+    """A kicking foot (``effector`` on a leg) lifted where the edits put any point of it below
+    the neutral clip's floor (the lowest its feet stood, ``neutral`` its kinematics): scaled,
+    a wind-up or a narrowed path swung the toes through the floor — and the standing foot then
+    read as hovering above a floor that low for the whole clip (Kick and Crescent Kick with
+    Time). Raised by the depth, low-passed over :data:`EDIT_SMOOTHING`, by IK on the leg."""
+    roles = guess_roles(motion.skeleton)
+    feet = [roles[k] for k in ("left_foot", "right_foot") if k in roles]
+    if effector not in feet:
+        return motion
+    base = motion.skeleton.parents[motion.skeleton.parents[effector]]
+    if base < 0:
+        return motion
+    floor = float(np.percentile(np.min([_sole(motion, neutral, a) for a in feet], axis=0), 2))
+    world = forward_kinematics(motion)
+    depth = np.maximum(floor - _sole(motion, world, effector), 0.0)
+    if depth.max() <= 1e-4:
+        return motion
+    sigma = EDIT_SMOOTHING / motion.frame_time
+    lift = np.maximum(gaussian_filter1d(maximum_filter1d(depth, int(2 * sigma) + 1), sigma, mode="nearest"), depth)
+    target = world[0][:, effector] + lift[:, None] * [0.0, 1.0, 0.0]
+    knee = int(motion.skeleton.parents[effector])
+    return two_bone_ik(motion, int(base), knee, effector, target, np.ones(motion.frames), world=world)
 
 
 def _acting(motion: Motion, mode: str, effector: int) -> np.ndarray:
@@ -682,6 +716,8 @@ def stylize_staged(motion: Motion, stages: Stages, lt: float = 0.0, lw: float = 
     if lw:
         m = _weight_poses(m, spans, lw, most_moving(motion, neutral_world))
     m = smooth_edit(motion, m)
+    if (lt or lw) and motion.frames >= 4:
+        m = _above_floor(m, neutral, most_moving(motion, neutral_world))
     world = forward_kinematics(m)
     if lw:
         times = _weight_times(world[0], times, lw, motion.frame_time, spans if lt else ())

@@ -373,3 +373,17 @@ def test_a_styled_flight_does_not_hang_in_the_air(name, lt, lw):
     clip = CLIPS[name][0]
     after = check(stylize(clip.motion, clip.stages, lt, lw))
     assert not after.hovering and after.passes, after.summary()
+
+
+# Kicks whose styled toes went through the floor: Time's scaled wind-up or Light's narrowed path
+# swung the kicking foot's toes below the floor the feet stand on — sinking, and the standing
+# foot read as hovering above a floor that low for the whole clip.
+@pytest.mark.parametrize("name,lt,lw", [("Kick", 1.0, 0.0), ("Kick", -1.0, 0.0), ("Kick", 1.0, -1.0),
+                                        ("Kick", 0.0, -1.0), ("Crescent Kick", 0.0, -1.0),
+                                        ("Crescent Kick", -1.0, -1.0)])
+def test_a_styled_kick_keeps_its_toes_above_the_floor(name, lt, lw):
+    from retarget.qa import check
+
+    clip = CLIPS[name][0]
+    after = check(stylize(clip.motion, clip.stages, lt, lw))
+    assert after.passes and not after.sinking and not after.hovering, after.summary()
