@@ -451,9 +451,9 @@ def _widen(motion: Motion, effector: int, k: float, neutral: np.ndarray) -> Moti
     the shoulder's: a strike's sway and lean into it are part of the movement that widens.
 
     A foot (a kick) widens about its floor, not its mean: its height above its lowest point is
-    scaled by ``k`` for Strong (a higher kick) and kept for Light (lowered, a foot whose toes
-    point down cut through the floor, and the standing foot then read as hovering), and
-    sideways its path widens or narrows only as it lifts off (fully :data:`FOOT_CLEAR` above the floor). Scaled about the mean, a
+    scaled by ``k`` (a Strong kick goes higher, a Light one lower; :func:`_above_floor` keeps
+    its toes out of the floor), and sideways its path widens or narrows only as it lifts off
+    (fully :data:`FOOT_CLEAR` above the floor). Scaled about the mean, a
     foot below it is pushed into the floor, where it dragged through the kick's wind-up and
     then snapped up (Crescent Kick Strong: held at the floor while the neutral lifted 0.25 m,
     then up at 9 m/s)."""
@@ -476,7 +476,7 @@ def _widen(motion: Motion, effector: int, k: float, neutral: np.ndarray) -> Moti
         floor = float(rel[:, 1].min())
         lift = np.clip((rel[:, 1] - floor) / FOOT_CLEAR, 0.0, 1.0)
         side = moved + rel + ((k - 1.0) * lift * lift * (3.0 - 2.0 * lift))[:, None] * (rel - centre)
-        up = floor + max(k, 1.0) * (rel[:, 1] - floor)  # lowered, a foot pointing its toes down cut the floor
+        up = floor + k * (rel[:, 1] - floor)
         target = np.concatenate([side[:, :1], up[:, None], side[:, 2:]], axis=1)
     target[:, 1] = np.maximum(target[:, 1], min(p[:, effector, 1].min(), target[:, 1].max()))  # a foot no lower than it went
     return two_bone_ik(motion, top, mid, effector, target, np.ones(motion.frames), world=world)
