@@ -605,11 +605,8 @@ def _flight(motion: Motion) -> np.ndarray:
     if len(feet) < 2 or motion.frames < 2:
         return np.zeros(max(motion.frames - 1, 0), dtype=bool)
     world = forward_kinematics(motion)
-    ends = end_site_positions(motion, world)
-    soles = np.array([np.min([world[0][:, j, 1] for j in motion.skeleton.subtree(a)]
-                             + [ends[j][:, 1] for j in motion.skeleton.subtree(a) if j in ends], axis=0)
-                      for a in feet])  # (feet, F): each foot's lowest point
-    lowest = soles.min(axis=0) - np.percentile(soles.min(axis=0), 2)
+    soles = np.min([_sole(motion, world, a) for a in feet], axis=0)  # the lower foot's lowest point
+    lowest = soles - np.percentile(soles, 2)
     up = np.zeros(motion.frames, dtype=bool)
     for a, b in _runs(lowest > Limits().hover):  # off the floor as the check reads it, and a jump's height
         up[max(a - 1, 0):b + 1] = lowest[a:b].max() >= JUMP_CLEAR and (b - a) * motion.frame_time >= JUMP_AIR
