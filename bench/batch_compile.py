@@ -120,15 +120,12 @@ _BYTECODE: list[Path] = []  # the children's bytecode folder (PYTHONPYCACHEPREFI
 
 def _env() -> dict:
     """The children's environment: OpenBLAS on one thread, this checkout importable, and
-    Python's bytecode cache on in a private folder (as in an installed program, and as
-    :mod:`bench.startup` measures; with ``PYTHONDONTWRITEBYTECODE=1`` and no ``__pycache__`` in
-    the checkout every run would compile our modules from source, a fixed cost on both sides)."""
+    Python's bytecode cache on in a private folder (:func:`bench.startup.with_bytecode`)."""
+    from bench.startup import with_bytecode
+
     env = dict(os.environ, OPENBLAS_NUM_THREADS="1",
                PYTHONPATH=os.pathsep.join(filter(None, [str(ROOT), os.environ.get("PYTHONPATH")])))
-    if _BYTECODE:
-        env.pop("PYTHONDONTWRITEBYTECODE", None)
-        env["PYTHONPYCACHEPREFIX"] = str(_BYTECODE[0])
-    return env
+    return with_bytecode(env, _BYTECODE[0]) if _BYTECODE else env
 
 
 def _child(argv: list[str]) -> tuple[float, str]:

@@ -58,14 +58,22 @@ def long_doodle(path: Path) -> Path:
 _BYTECODE: list[Path] = []  # the children's bytecode folder (PYTHONPYCACHEPREFIX), once made
 
 
+def with_bytecode(env: dict, folder: Path) -> dict:
+    """``env`` with Python's bytecode cache on, written to ``folder`` (as an installed program
+    has it; with ``PYTHONDONTWRITEBYTECODE=1`` and no ``__pycache__`` in the checkout, every
+    child would compile our modules from source)."""
+    env = {k: v for k, v in env.items() if k != "PYTHONDONTWRITEBYTECODE"}
+    env["PYTHONPYCACHEPREFIX"] = str(folder)
+    return env
+
+
 def _env(cache: Path | None, bytecode: bool = True) -> dict:
     env = dict(os.environ, OPENBLAS_NUM_THREADS="1", OMP_NUM_THREADS="1", MKL_NUM_THREADS="1")
     env["PYTHONPATH"] = os.pathsep.join([str(ROOT)] + [p for p in env.get("PYTHONPATH", "").split(os.pathsep) if p])
     env.pop("DOODLE_NO_CACHE", None)
     env.pop("PYTHONPYCACHEPREFIX", None)
     if bytecode and _BYTECODE:
-        env.pop("PYTHONDONTWRITEBYTECODE", None)
-        env["PYTHONPYCACHEPREFIX"] = str(_BYTECODE[0])
+        env = with_bytecode(env, _BYTECODE[0])
     if cache is not None:
         env["DOODLE_CACHE"] = str(cache)
     return env

@@ -171,13 +171,13 @@ def planted_moves(motion: Motion, world=None, limits: Limits = Limits()) -> tupl
     if motion.frames < 2 or not feet:
         n = max(motion.frames - 1, 0)
         return np.zeros((motion.frames, 0), dtype=bool), np.zeros((n, 0, 2))
-    points = [_foot_points(motion, positions, ends, a) for a in feet]
+    points = [foot_points(motion, positions, ends, a) for a in feet]
     ground = float(np.percentile(np.min([p[:, 1:, 1].min(axis=1) for p in points], axis=0), 2))
     pairs = [_flat_moves(p[..., 1] - ground, p, motion.frame_time, limits) for p in points]
     return np.stack([f for f, _ in pairs], axis=1), np.stack([m for _, m in pairs], axis=1)
 
 
-def _foot_points(motion: Motion, positions: np.ndarray, ends: dict, ankle: int) -> np.ndarray:
+def foot_points(motion: Motion, positions: np.ndarray, ends: dict, ankle: int) -> np.ndarray:
     """(F, 1 + k, 3): the ankle, then the sole's points — its descendants (toes) and their end
     sites (the ankle again when it has none)."""
     below = [j for j in motion.skeleton.subtree(ankle) if j != ankle]
@@ -212,7 +212,7 @@ def check(motion: Motion, terrain=None, limits: Limits = Limits(), ground: float
         return np.concatenate([positions[a:b, body]] + [e[a:b, None] for e in ends.values()], axis=1)
 
     feet = [roles[k] for k in ("left_foot", "right_foot") if k in roles]
-    feet_points = [_foot_points(motion, positions, ends, a) for a in feet]  # the ankle, then its sole's points
+    feet_points = [foot_points(motion, positions, ends, a) for a in feet]  # the ankle, then its sole's points
     soles = [p[:, 1:] for p in feet_points]
 
     def height(points):

@@ -24,7 +24,7 @@ from doodle.core import quat
 from doodle.core.filters import gaussian_filter1d
 from retarget.analysis import pelvis_of
 from retarget.qa import Limits, planted_moves
-from retarget.skeleton import Motion, Skeleton, end_site_positions, forward_kinematics, per_motion
+from retarget.skeleton import Motion, Skeleton, body_points, end_site_positions, forward_kinematics, per_motion
 from retarget.trajectory import Span
 
 
@@ -205,10 +205,7 @@ def _limits(motion: Motion, clip_in: float, clip_out: float | None, limit: float
 def _frame_speeds(motion: Motion) -> np.ndarray:
     """(F − 1,) the fastest joint or end site (m/s) between each two frames of a clip (read
     many times while a clip is given room and paced: computed once per clip)."""
-    world = forward_kinematics(motion)
-    ends = end_site_positions(motion, world)
-    positions = np.concatenate([world[0]] + [e[:, None] for e in ends.values()], axis=1)
-    return np.linalg.norm(np.diff(positions, axis=0), axis=2).max(axis=1) / motion.frame_time
+    return np.linalg.norm(np.diff(body_points(motion), axis=0), axis=2).max(axis=1) / motion.frame_time
 
 
 @per_motion

@@ -253,3 +253,11 @@ def end_site_positions(motion: Motion, world: tuple[np.ndarray, np.ndarray] | No
     # output follows these positions to the last printed digit (quat.rotate differs in the last bit)
     return {j: positions[:, j] + np.einsum("ijk,k->ij", quat.as_matrix(rotations[:, j]), off)
             for j, off in motion.skeleton.end_sites.items() if joints is None or j in joints}
+
+
+def body_points(motion: Motion, world: tuple[np.ndarray, np.ndarray] | None = None) -> np.ndarray:
+    """(F, joints + End Sites, 3): every point of the body — the End Sites too (fingertips,
+    toes, the top of the head), which a turning hand or foot sweeps faster than its joint."""
+    world = world if world is not None else forward_kinematics(motion)
+    ends = end_site_positions(motion, world)
+    return np.concatenate([world[0]] + [e[:, None] for e in ends.values()], axis=1)

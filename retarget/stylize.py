@@ -46,9 +46,9 @@ from doodle.core.splines import PchipInterpolator
 from retarget.analysis import Stages, foot_contacts, guess_roles, partition, pelvis_of
 from retarget.effort_signature import FASTEST, RATE, burst, most_moving, speed_profile
 from retarget.feet import two_bone_ik
-from retarget.qa import Limits, check, planted_moves
+from retarget.qa import Limits, check, foot_points, planted_moves
 from retarget.sequence import rise_least
-from retarget.skeleton import Motion, end_site_positions, forward_kinematics, per_motion
+from retarget.skeleton import Motion, body_points, end_site_positions, forward_kinematics, per_motion
 
 ALPHA_WEIGHT = 1.5
 ALPHA_LIGHT = 0.5  # Light: speed as played ∝ V_e^(1 − 0.5|L_w|) — flattened, never inverted (α ≥ 1 would make the slowest frames the fastest)
@@ -483,35 +483,46 @@ def _widen(motion: Motion, effector: int, k: float, neutral: np.ndarray) -> Moti
 
 
 def _sole(motion: Motion, world: tuple[np.ndarray, np.ndarray], ankle: int) -> np.ndarray:
-    """(F,) the lowest point of a foot: its ankle, toes and their End Sites."""
-    ends = end_site_positions(motion, world)
-    below = motion.skeleton.subtree(ankle)
-    return np.min([world[0][:, j, 1] for j in below] + [ends[j][:, 1] for j in below if j in ends], axis=0)
+    """(F,) the lowest point of a foot — its ankle, toes and their End Sites — as the animation
+    check reads it (``retarget.qa.foot_points``)."""
+    return foot_points(motion, world[0], end_site_positions(motion, world), ankle)[..., 1].min(axis=1)
 
 
-def _above_floor(motion: Motion, neutral: tuple[np.ndarray, np.ndarray], effector: int) -> Motion:
-    """A kicking foot (``effector`` on a leg) lifted where the edits put any point of it below
-    the neutral clip's floor (the lowest its feet stood, ``neutral`` its kinematics): scaled,
-    a wind-up or a narrowed path swung the toes through the floor — and the standing foot then
-    read as hovering above a floor that low for the whole clip (Kick and Crescent Kick with
-    Time). Raised by the depth, low-passed over :data:`EDIT_SMOOTHING`, by IK on the leg."""
+@per_motion
+def _soles(motion: Motion) -> np.ndarray:
+    """(F,) a neutral clip's lower foot's lowest point per frame (its 2nd percentile is the
+    clip's floor, as the check reads it); empty without two feet. Once per clip, read-only."""
     roles = guess_roles(motion.skeleton)
     feet = [roles[k] for k in ("left_foot", "right_foot") if k in roles]
-    if effector not in feet:
-        return motion
-    base = motion.skeleton.parents[motion.skeleton.parents[effector]]
-    if base < 0:
-        return motion
-    floor = float(np.percentile(np.min([_sole(motion, neutral, a) for a in feet], axis=0), 2))
+    if len(feet) < 2:
+        return np.zeros(0)
     world = forward_kinematics(motion)
-    depth = np.maximum(floor - _sole(motion, world, effector), 0.0)
+    out = np.min([_sole(motion, world, a) for a in feet], axis=0)
+    out.flags.writeable = False
+    return out
+
+
+def _above_floor(edited: Motion, motion: Motion, effector: int) -> Motion:
+    """The ``edited`` clip with its kicking foot (``effector`` on a leg) lifted where the edits
+    put any point of it below the neutral clip's (``motion``'s) floor: scaled, a wind-up or a
+    narrowed path swung the toes through the floor — and the standing foot then read as
+    hovering above a floor that low for the whole clip (Kick and Crescent Kick with Time).
+    Raised by the depth, low-passed over :data:`EDIT_SMOOTHING`, by IK on the leg."""
+    roles = guess_roles(edited.skeleton)
+    parents = edited.skeleton.parents
+    soles = _soles(motion)
+    if effector not in (roles.get("left_foot"), roles.get("right_foot")) or not soles.size \
+            or parents[parents[effector]] < 0:
+        return edited
+    world = forward_kinematics(edited)
+    depth = np.maximum(float(np.percentile(soles, 2)) - _sole(edited, world, effector), 0.0)
     if depth.max() <= 1e-4:
-        return motion
-    sigma = EDIT_SMOOTHING / motion.frame_time
+        return edited
+    sigma = EDIT_SMOOTHING / edited.frame_time
     lift = np.maximum(gaussian_filter1d(maximum_filter1d(depth, int(2 * sigma) + 1), sigma, mode="nearest"), depth)
     target = world[0][:, effector] + lift[:, None] * [0.0, 1.0, 0.0]
-    knee = int(motion.skeleton.parents[effector])
-    return two_bone_ik(motion, int(base), knee, effector, target, np.ones(motion.frames), world=world)
+    knee = int(parents[effector])
+    return two_bone_ik(edited, int(parents[knee]), knee, effector, target, np.ones(edited.frames), world=world)
 
 
 def _acting(motion: Motion, mode: str, effector: int) -> np.ndarray:
@@ -600,12 +611,9 @@ def _flight(motion: Motion) -> np.ndarray:
     jump, flip or back flip hung in the air (soles up for longer than any real jump: 11 of 200
     styled built-in one-shots failed the animation check so). Sudden may still play a flight
     quicker (a snappier, lower-looking jump; kept so that a jumping kick shows its Time)."""
-    roles = guess_roles(motion.skeleton)
-    feet = [roles[k] for k in ("left_foot", "right_foot") if k in roles]
-    if len(feet) < 2 or motion.frames < 2:
+    soles = _soles(motion)
+    if not soles.size or motion.frames < 2:
         return np.zeros(max(motion.frames - 1, 0), dtype=bool)
-    world = forward_kinematics(motion)
-    soles = np.min([_sole(motion, world, a) for a in feet], axis=0)  # the lower foot's lowest point
     lowest = soles - np.percentile(soles, 2)
     up = np.zeros(motion.frames, dtype=bool)
     for a, b in _runs(lowest > Limits().hover):  # off the floor as the check reads it, and a jump's height
@@ -620,23 +628,13 @@ def _flight_most(air: np.ndarray, frame_time: float) -> np.ndarray:
     slowed take-off meets the flight (a jerk)."""
     if not air.any():
         return np.full(len(air), np.inf)
-    inside = np.flatnonzero(air)
-    k = np.arange(len(air))
-    at = np.clip(np.searchsorted(inside, k), 1, len(inside) - 1) if len(inside) > 1 else np.zeros(len(air), int)
-    away = np.minimum(np.abs(k - inside[at]), np.abs(k - inside[np.maximum(at - 1, 0)])) * frame_time
+    away = np.abs(np.arange(len(air))[:, None] - np.flatnonzero(air)[None]).min(axis=1) * frame_time
     return frame_time * (1.0 + away / FLIGHT_EASE)
 
 
-def _points(motion: Motion, world: tuple[np.ndarray, np.ndarray]) -> np.ndarray:
-    """(F, joints + end sites, 3): every point of the body whose speed is bounded — the End
-    Sites too (fingertips, toes, the top of the head), which a turning hand or foot sweeps
-    faster than its joint; the animation check counts them (``retarget.qa``, pops)."""
-    ends = end_site_positions(motion, world)
-    return np.concatenate([world[0], np.stack(list(ends.values()), axis=1)], axis=1) if ends else world[0]
-
-
 def _least(points: np.ndarray) -> np.ndarray:
-    """Per clip frame interval of the body's points (F, P, 3, :func:`_points`), the least time
+    """Per clip frame interval of the body's points (F, P, 3, ``retarget.skeleton.body_points``:
+    the End Sites too, which the animation check counts), the least time
     it may take for none to move faster than ``SPEED_MARGIN × FASTEST``."""
     return np.linalg.norm(np.diff(points, axis=0), axis=2).max(axis=1) / (SPEED_MARGIN * FASTEST)
 
@@ -663,9 +661,9 @@ def _rise_least(motion: Motion, world: np.ndarray) -> np.ndarray:
 
 def _too_fast(out: Motion, clip_t: np.ndarray, clip_frame_time: float, clip_frames: int) -> np.ndarray:
     """Per clip frame interval, how many times faster than ``SPEED_BOUND × FASTEST`` the
-    fastest point of the output ``out`` (:func:`_points`; its frames showing clip times
+    fastest point of the output ``out`` (``body_points``; its frames showing clip times
     ``clip_t``) moves while it plays that interval (≤ 1 where none does)."""
-    points = _points(out, forward_kinematics(out))
+    points = body_points(out)
     v = np.linalg.norm(np.diff(points, axis=0), axis=2).max(axis=1) / out.frame_time / (SPEED_BOUND * FASTEST)
     k = np.clip((0.5 * (clip_t[1:] + clip_t[:-1]) / clip_frame_time).astype(int), 0, clip_frames - 2)
     over = np.zeros(clip_frames - 1)
@@ -699,27 +697,26 @@ def stylize_staged(motion: Motion, stages: Stages, lt: float = 0.0, lw: float = 
     if (lt == 0.0 and lw == 0.0) or motion.frames < 2:
         return motion, stages
     t = np.arange(motion.frames) * motion.frame_time
-    neutral = forward_kinematics(motion)
-    neutral_world = neutral[0]
+    neutral_world = forward_kinematics(motion)[0]
     spans = _execution(motion, stages, neutral_world) if motion.frames >= 4 else (0, 0, motion.frames)
     m, times = motion, t
+    j = most_moving(motion, neutral_world)  # the acting hand or foot
     if lt:
-        j = most_moving(motion, neutral_world)
         m = _time_poses(m, spans, lt, j)
         tt, v = speed_profile(m, j)  # as the anticipation scaled down leaves it
         speed = np.interp(t[:-1] + 0.5 * motion.frame_time, tt, v)
         rate = _time_rates(motion, spans, lt, speed)
         times = np.concatenate([[0.0], np.cumsum(motion.frame_time / rate)])
     if lw:
-        m = _weight_poses(m, spans, lw, most_moving(motion, neutral_world))
+        m = _weight_poses(m, spans, lw, j)
     m = smooth_edit(motion, m)
     if (lt or lw) and motion.frames >= 4:
-        m = _above_floor(m, neutral, most_moving(motion, neutral_world))
+        m = _above_floor(m, motion, j)
     world = forward_kinematics(m)
     if lw:
         times = _weight_times(world[0], times, lw, motion.frame_time, spans if lt else ())
     times = _smooth_rate(times, motion.frame_time)
-    least = np.maximum.reduce([_least(_points(m, world)), _planted_least(motion), _rise_least(motion, world[0])])
+    least = np.maximum.reduce([_least(body_points(m, world)), _planted_least(motion), _rise_least(motion, world[0])])
     most = _flight_most(_flight(motion), motion.frame_time)
     for _ in range(5):  # the output measured as it plays — spline, contact IK and all — and slowed where too fast
         times = _bounded(times, least, keep_duration=not lt, most=most)
