@@ -187,11 +187,12 @@ def pin_feet(motion: Motion, feet: list[int], fade: int = 3, terrain=None, conta
         aloft = ~contacts.any(axis=1)
         rise = [np.where(aloft, 0.0, terrain.height(original[:, a][:, [0, 2]]) - under_root) for a in feet]
         rise = [gaussian_filter1d(r, 1.0, mode="nearest") for r in rise]  # eased into and out of a flight
+    aloft = _aloft(original, feet, contacts, terrain, standing)
     targets, weights, helds = [], [], []
     for k, ankle in enumerate(feet):
         target, weight, held = _pins(original[:, ankle], contacts[:, k], fade, terrain,
                                      None if standing is None else standing[k], None if rise is None else rise[k],
-                                     motion.fps)
+                                     motion.fps, aloft=aloft)
         targets.append(target)
         weights.append(weight)
         helds.append(held)
@@ -227,6 +228,21 @@ def pin_feet(motion: Motion, feet: list[int], fade: int = 3, terrain=None, conta
         _leg_ik(rots, motion, hip, knee, ankle, target, helds[k] ** 4, world=world,  # only a stance: not a lifting foot
                 front=front)
     return motion if rots is None else replace(motion, rotations=rots)
+
+
+def _aloft(positions: np.ndarray, feet: list[int], contacts: np.ndarray, terrain,
+           standing: list[float] | None) -> np.ndarray:
+    """(F,) the body in the air: no foot in contact and every ankle higher than
+    :data:`STEP_LIFT` above its standing height (default: its lowest over the contacts) —
+    a jump's or a run's flight, not two feet the cross-fades' votes leave out of contact for
+    a frame while they stand."""
+    up = ~contacts.any(axis=1)
+    for k, a in enumerate(feet):
+        height = positions[:, a, 1] - _ground(terrain, positions[:, a][:, [0, 2]])
+        base = standing[k] if standing is not None else (
+            float(height[contacts[:, k]].min()) if contacts[:, k].any() else float(height.min()))
+        up &= height > base + STEP_LIFT
+    return up
 
 
 def _front(motion: Motion, positions: np.ndarray, feet: list[int]) -> np.ndarray | None:
@@ -292,13 +308,16 @@ STEP_APEX = (0.04, 0.10)  # m: the apex of a given step, half its length, within
 
 
 def _pins(ankle: np.ndarray, contact: np.ndarray, fade: int, terrain, standing: float | None,
-          rise: np.ndarray | None = None, fps: float = 30.0):
+          rise: np.ndarray | None = None, fps: float = 30.0, aloft: np.ndarray | None = None):
     """One foot's targets (F, 3), weights (F,) and standing weights (F,): held at its landing
     spot over each contact interval (a new spot once the body has left it more than
     :data:`REACH` behind); between two spots, a foot that the blended clips shuffle along
     the floor (lifted less than :data:`STEP_LIFT`) or fling there (faster than
     :data:`STEP_SPEED`) steps instead — lifted in an arc, over at least the time a step of
-    that length takes (borrowed from the stances either side);
+    that length takes (borrowed from the stances either side) — unless the body is in the air
+    in between (``aloft``, :func:`_aloft`: a jump's or a run's flight), where the foot goes
+    with the body (a back flip travelling 3 m had its feet dragged along a step's low arc
+    under it, the legs bent down out of the flip and snapping back at 17 m/s);
     on uneven ground (``rise``: the ground under the foot above the ground under the root)
     raised by the ground under it elsewhere."""
     frames = len(ankle)
@@ -323,7 +342,8 @@ def _pins(ankle: np.ndarray, contact: np.ndarray, fade: int, terrain, standing: 
         lo, hi = a[1], b[0]  # the gap: frames [lo, hi) between the two stances
         lifted = float((height[lo:hi] - a[2][1]).max()) if hi > lo else 0.0
         need = int(np.ceil(length / STEP_SPEED * fps)) + 1
-        if length < 0.05 or (lifted >= STEP_LIFT and hi - lo >= need):
+        flying = aloft is not None and bool(aloft[lo:hi].any())
+        if length < 0.05 or flying or (lifted >= STEP_LIFT and hi - lo >= need):
             continue
         while hi - lo < need and (a[1] - a[0] > 1 or b[1] - b[0] > 1):
             if a[1] - a[0] > 1 and (hi - lo) % 2 == 0:
@@ -348,8 +368,9 @@ def _pins(ankle: np.ndarray, contact: np.ndarray, fade: int, terrain, standing: 
             for k in range(1, n + 1):
                 w = 1.0 - k / (n + 1)
                 f = edge + sign * k
-                if 0 <= f < frames and w > held[f]:
-                    pin[f], held[f] = pin[edge], w
+                if 0 <= f < frames and w > held[f]:  # in the air: the correction fades, the foot flies on
+                    pin[f] = follow[f] + (pin[edge] - follow[edge]) if aloft is not None and aloft[f] else pin[edge]
+                    held[f] = w
     stance = held.copy()
     for lo, hi, a, b, length in steps:  # a step in an arc from one spot to the next
         u = (np.arange(lo, hi) - lo + 1) / (hi - lo + 1)
