@@ -119,6 +119,12 @@ def test_pacing_keeps_joints_under_the_limit_and_the_flight_at_its_own_pace():
     assert _peak(m, u, knots, short) < 12.0 < _peak(m, np.array([0.0, 1.0]), np.array([0.0, end]), short)
     slow = paced(m, 0.0, None, 2 * end)  # never slowed below its own pace for speed
     assert np.allclose(slow[0], [0.0, 1.0])
+    long = 1.5 * end  # a jump held longer than the clip: slowed, all but the flight
+    u, knots = paced(m, 0.0, None, long, 11.0, flight)
+    assert u[0] == 0.0 and u[-1] == pytest.approx(1.0) and np.all(np.diff(u) > 0)
+    assert np.allclose(np.diff(u)[inside] * long, np.diff(knots)[inside])  # the flight in real time
+    rate = np.diff(knots) / (np.diff(u) * long)
+    assert rate.min() > 0.5 and np.abs(np.diff(rate)).max() < 0.1  # the rest slowed evenly, eased (no lurch)
 
 
 def test_a_foot_the_blends_shuffle_takes_a_step_and_does_not_slide():
