@@ -162,7 +162,7 @@ def stride_scale(motion: Motion, pelvis: int, speed: float) -> float:
 FASTEST = 11.0  # m/s: a retimed clip's joints move no faster (real motion capture: ≤ 12.2 m/s)
 QUICKEST = 2.0  # … and no part of it plays more than this much faster than the clip's own pace: a slow
 # part is slow because of the body's weight too (standing up from a landing crouch), not only a hold
-FLIGHT_EASE = 0.25  # s of clip time over which a slowed jump's rate eases into its flight's own pace
+SLOWED_EASE = 0.25  # s of clip time over which a slowed jump's rate eases into its flight's own pace
 RISE_MARGIN = 0.9  # both feet flat on the floor, the pelvis rises no faster than this share of the check's limit
 
 
@@ -271,14 +271,14 @@ def _slowed_around(knots: np.ndarray, step: np.ndarray, natural: tuple, duration
     """Pacing knots (span fractions at ``knots``) for a clip range played slower than its own
     pace over ``duration``: the flight (clip times ``natural``) at its own pace — slowed
     evenly, a performer's long-held jump hung in the air — and the rest slowed to fill the
-    span, the rate eased into the flight's over :data:`FLIGHT_EASE` of clip time. None when
+    span, the rate eased into the flight's over :data:`SLOWED_EASE` of clip time. None when
     no step is outside it."""
     mid = (knots[1:] + knots[:-1]) / 2
     away = np.maximum(natural[0] - mid, mid - natural[1])
     inside = (knots[1:] > natural[0] + 1e-9) & (knots[:-1] < natural[1] - 1e-9)
     if not inside.any() or inside.all():
         return None
-    w = np.where(inside, 0.0, _smoothstep(np.clip(away / FLIGHT_EASE, 0.0, 1.0)))
+    w = np.where(inside, 0.0, _smoothstep(np.clip(away / SLOWED_EASE, 0.0, 1.0)))
     lo, hi = 1e-6, 1.0  # the rate away from the flight, by bisection: the clip fills the span
     for _ in range(60):
         r = (lo + hi) / 2
