@@ -176,10 +176,11 @@ def pin_feet(motion: Motion, feet: list[int], fade: int = 3, terrain=None, conta
             if j < 0:
                 break
     if contacts is None:
-        original = forward_kinematics(motion)[0]
-        contacts = planted(motion, feet, original, terrain)
+        original_world = forward_kinematics(motion)
+        contacts = planted(motion, feet, original_world[0], terrain)
     else:  # only the legs' positions: a long motion's (F, J, 7) never made
-        original = kinematics_of(motion, legs)[0]
+        original_world = kinematics_of(motion, legs)
+    original = original_world[0]
     rise = None
     if terrain is not None:  # the ground under each foot relative to the ground under the root,
         # but not in the air (both feet off: the feet go with the body)
@@ -192,7 +193,8 @@ def pin_feet(motion: Motion, feet: list[int], fade: int = 3, terrain=None, conta
     for k, ankle in enumerate(feet):
         target, weight, held = _pins(original[:, ankle], contacts[:, k], fade, terrain,
                                      None if standing is None else standing[k], None if rise is None else rise[k],
-                                     motion.fps, aloft=aloft)
+                                     motion.fps, aloft=aloft,
+                                     clear=_clearance(motion, original_world, ankle, terrain) - sole)
         targets.append(target)
         weights.append(weight)
         helds.append(held)
@@ -308,7 +310,8 @@ STEP_APEX = (0.04, 0.10)  # m: the apex of a given step, half its length, within
 
 
 def _pins(ankle: np.ndarray, contact: np.ndarray, fade: int, terrain, standing: float | None,
-          rise: np.ndarray | None = None, fps: float = 30.0, aloft: np.ndarray | None = None):
+          rise: np.ndarray | None = None, fps: float = 30.0, aloft: np.ndarray | None = None,
+          clear: np.ndarray | None = None):
     """One foot's targets (F, 3), weights (F,) and standing weights (F,): held at its landing
     spot over each contact interval (a new spot once the body has left it more than
     :data:`REACH` behind); between two spots, a foot that the blended clips shuffle along
@@ -319,7 +322,13 @@ def _pins(ankle: np.ndarray, contact: np.ndarray, fade: int, terrain, standing: 
     with the body (a back flip travelling 3 m had its feet dragged along a step's low arc
     under it, the legs bent down out of the flip and snapping back at 17 m/s);
     on uneven ground (``rise``: the ground under the foot above the ground under the root)
-    raised by the ground under it elsewhere."""
+    raised by the ground under it elsewhere. ``clear`` (per frame, how far the foot's lowest
+    point is above the ground as the clips have it): an ankle the clips put lower than
+    standing is raised no higher than puts that point on the floor (raised to the standing
+    height, a foot landing heel or toes first was held up in the air), and a pin fading in
+    as the foot lands out of a flight (``aloft``) lowers it no more than that (a toes-first landing pulled down to the standing height put
+    its toes through the floor, and the body lifted out of it over the frames around left the
+    landing feet hovering: a back flip's flight a frame longer than any real one)."""
     frames = len(ankle)
     follow = ankle.copy()
     if rise is not None:
@@ -357,6 +366,7 @@ def _pins(ankle: np.ndarray, contact: np.ndarray, fade: int, terrain, standing: 
                 lo -= 1
         steps.append((lo, hi, a[2], b[2], length))
     pin, held = follow.copy(), np.zeros(frames)
+    landing = np.zeros(frames, dtype=bool)  # fading in: coming down onto its spot out of a flight
     for s, stop, on in pins:
         pin[s:stop] = on
         held[s:stop] = 1.0
@@ -365,12 +375,15 @@ def _pins(ankle: np.ndarray, contact: np.ndarray, fade: int, terrain, standing: 
         gap_in = np.linalg.norm((pin[s] - follow[max(s - 1, 0)])[[0, 2]])
         gap_out = np.linalg.norm((pin[stop - 1] - follow[min(stop, frames - 1)])[[0, 2]])
         for n, sign, edge in ((_fade(gap_in, fade, fps), -1, s), (_fade(gap_out, fade, fps), 1, stop - 1)):
+            # coming down out of a flight (not a contact the cross-fades' votes flicker on for a frame)
+            lands = sign < 0 and aloft is not None and int(aloft[max(edge - n - 3, 0):edge].sum()) >= 3
             for k in range(1, n + 1):
                 w = 1.0 - k / (n + 1)
                 f = edge + sign * k
                 if 0 <= f < frames and w > held[f]:  # in the air: the correction fades, the foot flies on
                     pin[f] = follow[f] + (pin[edge] - follow[edge]) if aloft is not None and aloft[f] else pin[edge]
                     held[f] = w
+                    landing[f] = lands
     stance = held.copy()
     for lo, hi, a, b, length in steps:  # a step in an arc from one spot to the next
         u = (np.arange(lo, hi) - lo + 1) / (hi - lo + 1)
@@ -379,14 +392,23 @@ def _pins(ankle: np.ndarray, contact: np.ndarray, fade: int, terrain, standing: 
         held[lo:hi] = 1.0
         stance[lo:hi] = 0.0
     sunk = np.zeros(frames, dtype=bool)
+    if clear is not None and rise is not None:
+        clear = clear + rise  # as the foot follows the ground under it
     if standing is not None:  # an ankle the clips (a style) put lower than standing on the floor: raised
         floor = _ground(terrain, follow[:, [0, 2]]) + standing
         sunk = follow[:, 1] < floor - 0.02
-        follow[:, 1] = np.where(sunk, floor, follow[:, 1])
+        up = np.where(sunk, floor - follow[:, 1], 0.0)
+        if clear is not None:  # … no higher than puts its lowest point on the floor (a foot not flat)
+            up = np.minimum(up, np.maximum(-clear, 0.0))
+            clear = clear + up
+        follow[:, 1] += up
     # fading in and out, the foot is over its spot before it is down on it (and off it only
     # once lifted): horizontally it eases faster than vertically, so it does not land sliding
     across, down = _smooth(np.minimum(1.0, 1.5 * held)), _smooth(held)
     target = follow + (pin - follow) * np.column_stack([across, down, across])
+    if clear is not None:  # landing on its spot, no lower than its lowest point on the floor
+        fading = landing & (stance > 0.0) & (stance < 1.0)
+        target[:, 1] = np.where(fading, np.maximum(target[:, 1], follow[:, 1] - np.maximum(clear, 0.0)), target[:, 1])
     weight = np.ones(frames) if rise is not None else ((held > 0) | sunk).astype(float)
     return target, weight, stance
 
