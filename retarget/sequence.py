@@ -160,6 +160,10 @@ def stride_scale(motion: Motion, pelvis: int, speed: float) -> float:
 
 
 FASTEST = 11.0  # m/s: a retimed clip's joints move no faster (real motion capture: ≤ 12.2 m/s)
+BLEND = 0.2  # s: neighbouring clips are cross-faded over this, centred on their boundary …
+BLEND_SPEED = 0.5 * FASTEST  # m/s: … or longer, so the cross-fade alone swings no point faster (the
+# other half left to the clips' own motion) …
+BLEND_MOST = 0.6  # s: … up to this
 QUICKEST = 2.0  # … and no part of it plays more than this much faster than the clip's own pace: a slow
 # part is slow because of the body's weight too (standing up from a landing crouch), not only a hold
 SLOWED_EASE = 0.25  # s of clip time over which a slowed jump's rate eases into its flight's own pace
@@ -329,9 +333,11 @@ def pose_at(placed: Placed, t: np.ndarray, path_xz: np.ndarray, heading: np.ndar
 
 
 def sequence(placed: list[Placed], times: np.ndarray, path_xz: np.ndarray, heading: np.ndarray,
-             skeleton: Skeleton, fps: float, blend: float = 0.2,
+             skeleton: Skeleton, fps: float, blend=BLEND,
              ground_y: np.ndarray | None = None) -> tuple[Motion, list[float]]:
-    """The whole timeline at ``fps``; returns the motion and the transition times."""
+    """The whole timeline at ``fps``; returns the motion and the transition times.
+    ``blend``: the cross-fades' length (s), one for all or one per transition
+    (:func:`blend_lengths`)."""
     frames = len(times)
     j = len(skeleton)
     trans = np.zeros((frames, j, 3))
@@ -356,39 +362,72 @@ def sequence(placed: list[Placed], times: np.ndarray, path_xz: np.ndarray, headi
     return Motion(skeleton, trans, rots, 1.0 / fps), boundaries
 
 
-def _blend_weights(placed: list[Placed], times: np.ndarray, blend: float):
-    """Per placed clip: the output frames it plays in and its cross-fade weight there."""
+def boundary_gaps(placed: list[Placed], times: np.ndarray, path_xz: np.ndarray, heading: np.ndarray,
+                  skeleton: Skeleton) -> np.ndarray:
+    """(len(placed) - 1,) per transition, how far apart (m) the two clips put the body's
+    farthest point (joint or End Site) at the moment one hands over to the next."""
+    if len(placed) < 2:
+        return np.zeros(0)
+    at = np.array([b.span.t0 for b in placed[1:]])
+    xz = np.column_stack([np.interp(at, times, path_xz[:, 0]), np.interp(at, times, path_xz[:, 1])])
+    h = np.interp(at, times, heading)
+    trans, rots = [], []
+    for k, (a, b) in enumerate(zip(placed, placed[1:])):
+        for pl in (a, b):
+            tr, ro = pose_at(pl, at[k:k + 1], xz[k:k + 1], h[k:k + 1])
+            trans.append(tr)
+            rots.append(ro)
+    points = body_points(Motion(skeleton, np.concatenate(trans), np.concatenate(rots), 1.0))  # one pass for all
+    return np.linalg.norm(points[1::2] - points[0::2], axis=2).max(axis=1)
+
+
+def blend_lengths(gaps: np.ndarray, blend: float = BLEND) -> np.ndarray:
+    """Per transition, how long its cross-fade lasts (s): ``blend``, or longer where the two
+    clips put the body far apart (``gaps``, :func:`boundary_gaps`) — so that the cross-fade
+    alone swings no point faster than :data:`BLEND_SPEED` (a smoothstep's steepest slope,
+    1.5 / duration, over the arc a rotation takes, at most π/2 × the gap) — up to
+    :data:`BLEND_MOST`: a raised arm whose return to rest was trimmed, cross-faded into a
+    stand in 0.2 s, swung its hand down at 17 m/s."""
+    return np.clip(1.5 * (np.pi / 2) * np.asarray(gaps, dtype=float) / BLEND_SPEED, blend, max(blend, BLEND_MOST))
+
+
+def _blend_weights(placed: list[Placed], times: np.ndarray, blend):
+    """Per placed clip: the output frames it plays in and its cross-fade weight there
+    (``blend``: the cross-fades' length, one for all or one per transition)."""
+    blends = np.broadcast_to(np.asarray(blend, dtype=float), (max(len(placed) - 1, 0),))
     out = []
     for k, pl in enumerate(placed):
-        lo = pl.span.t0 - (blend / 2 if k > 0 else 0.0)
-        hi = pl.span.t1 + (blend / 2 if k < len(placed) - 1 else 0.0)
+        before = blends[k - 1] if k > 0 else 0.0
+        after = blends[k] if k < len(placed) - 1 else 0.0
+        lo = pl.span.t0 - before / 2
+        hi = pl.span.t1 + after / 2
         first = int(np.searchsorted(times, lo - 1e-9, side="left"))  # times sorted: a span, not a mask
         stop = int(np.searchsorted(times, hi + 1e-9, side="right"))
         if k == 0:  # ... and every frame before the first span
-            before = int(np.searchsorted(times, pl.span.t0, side="left"))
-            if before > 0:
-                first, stop = 0, max(stop, before)
+            start = int(np.searchsorted(times, pl.span.t0, side="left"))
+            if start > 0:
+                first, stop = 0, max(stop, start)
         if k == len(placed) - 1:  # ... and every frame after the last
-            after = int(np.searchsorted(times, pl.span.t1, side="right"))
-            if after < len(times):
-                first, stop = min(first, after), len(times)
+            end = int(np.searchsorted(times, pl.span.t1, side="right"))
+            if end < len(times):
+                first, stop = min(first, end), len(times)
         idx = np.arange(first, max(stop, first))
         if len(idx) == 0:
             continue
         w = np.ones(len(idx))
         tt = times[idx]
         if k > 0:
-            w *= _smoothstep((tt - (pl.span.t0 - blend / 2)) / blend)
+            w *= _smoothstep((tt - (pl.span.t0 - before / 2)) / before)
         if k < len(placed) - 1:
-            w *= 1.0 - _smoothstep((tt - (pl.span.t1 - blend / 2)) / blend)
+            w *= 1.0 - _smoothstep((tt - (pl.span.t1 - after / 2)) / after)
         out.append((pl, idx, w))
     return out
 
 
-def contact_states(placed: list[Placed], times: np.ndarray, feet: int = 2, blend: float = 0.2) -> np.ndarray:
+def contact_states(placed: list[Placed], times: np.ndarray, feet: int = 2, blend=BLEND) -> np.ndarray:
     """(F, feet) bool: where the sequenced clips mean each foot to stand on the ground —
     each clip's own contacts at the clip time it plays, voted with the cross-fade weights of
-    :func:`sequence` (a clip without contacts counts as standing)."""
+    :func:`sequence` (``blend`` as it had them; a clip without contacts counts as standing)."""
     vote = np.zeros((len(times), feet))
     total = np.zeros(len(times))
     for pl, idx, w in _blend_weights(placed, times, blend):

@@ -203,6 +203,23 @@ def test_a_landing_foot_is_not_held_up_by_its_pin(scene):
     assert checks["c0"].passes and not checks["c0"].hovering, checks["c0"].summary()
 
 
+@pytest.mark.parametrize("actions, seed", [(("Idle", "Walk", "Raise One Arm", "Side Walk Left", "Idle"), 33),
+                                           (("Idle", "Dance", "Idle"), 21)])
+def test_a_cross_fade_between_far_apart_poses_does_not_whip(actions, seed):
+    """A quick small performer: the raised arm's return to rest trimmed away for want of
+    time, a 0.2 s cross-fade into the stand after it swung the hand down at 17 m/s; the Dance's
+    arms at 16 m/s into the Idle. A cross-fade now lasts as long as the gap between the two
+    poses needs (up to 0.6 s)."""
+    from doodle.synth.performers import perform, style_grid
+    from retarget.sequence import BLEND, BLEND_MOST, blend_lengths
+
+    quick = next(s for s in style_grid() if s.label().startswith("size×0.5 tempo×0.6 pause 0.15 s"))
+    doodle, _ = perform(actions, quick, seed=seed)
+    _, checks = _checked(doodle, effort_model=_effort())
+    assert checks["c0"].passes and not checks["c0"].pops, checks["c0"].summary()
+    assert list(blend_lengths([0.0, 0.3, 1.0, 9.0])) == pytest.approx([BLEND, BLEND, 0.43, BLEND_MOST], abs=0.01)
+
+
 def test_a_jump_travels_in_a_straight_line_at_an_even_speed_in_the_air():
     from retarget.trajectory import Span, world_path
 
