@@ -371,13 +371,14 @@ def boundary_gaps(placed: list[Placed], times: np.ndarray, path_xz: np.ndarray, 
     at = np.array([b.span.t0 for b in placed[1:]])
     xz = np.column_stack([np.interp(at, times, path_xz[:, 0]), np.interp(at, times, path_xz[:, 1])])
     h = np.interp(at, times, heading)
-    trans, rots = [], []
-    for k, (a, b) in enumerate(zip(placed, placed[1:])):
-        for pl in (a, b):
-            tr, ro = pose_at(pl, at[k:k + 1], xz[k:k + 1], h[k:k + 1])
-            trans.append(tr)
-            rots.append(ro)
-    points = body_points(Motion(skeleton, np.concatenate(trans), np.concatenate(rots), 1.0))  # one pass for all
+    n = len(at)
+    trans = np.zeros((2 * n, len(skeleton), 3))
+    rots = np.zeros((2 * n, len(skeleton), 4))
+    for k, pl in enumerate(placed):  # each clip once: at the hand-over it starts with and the one it ends with
+        ends = [i for i in (k - 1, k) if 0 <= i < n]
+        rows = [2 * i + 1 if i == k - 1 else 2 * i for i in ends]
+        trans[rows], rots[rows] = pose_at(pl, at[ends], xz[ends], h[ends])
+    points = body_points(Motion(skeleton, trans, rots, 1.0))  # one pass for all
     return np.linalg.norm(points[1::2] - points[0::2], axis=2).max(axis=1)
 
 
