@@ -188,12 +188,12 @@ def pin_feet(motion: Motion, feet: list[int], fade: int = 3, terrain=None, conta
         aloft = ~contacts.any(axis=1)
         rise = [np.where(aloft, 0.0, terrain.height(original[:, a][:, [0, 2]]) - under_root) for a in feet]
         rise = [gaussian_filter1d(r, 1.0, mode="nearest") for r in rise]  # eased into and out of a flight
-    aloft = _aloft(original, feet, contacts, terrain, standing)
+    in_air = _aloft(original, feet, contacts, terrain, standing)  # the body, not only the feet
     targets, weights, helds = [], [], []
     for k, ankle in enumerate(feet):
         target, weight, held = _pins(original[:, ankle], contacts[:, k], fade, terrain,
                                      None if standing is None else standing[k], None if rise is None else rise[k],
-                                     motion.fps, aloft=aloft,
+                                     motion.fps, aloft=in_air,
                                      clear=_clearance(motion, original_world, ankle, terrain) - sole)
         targets.append(target)
         weights.append(weight)
@@ -326,9 +326,10 @@ def _pins(ankle: np.ndarray, contact: np.ndarray, fade: int, terrain, standing: 
     point is above the ground as the clips have it): an ankle the clips put lower than
     standing is raised no higher than puts that point on the floor (raised to the standing
     height, a foot landing heel or toes first was held up in the air), and a pin fading in
-    as the foot lands out of a flight (``aloft``) lowers it no more than that (a toes-first landing pulled down to the standing height put
-    its toes through the floor, and the body lifted out of it over the frames around left the
-    landing feet hovering: a back flip's flight a frame longer than any real one)."""
+    as the foot lands out of a flight (``aloft``) lowers it no more than that (a toes-first
+    landing pulled down to the standing height put its toes through the floor, and the body
+    lifted out of it over the frames around left the landing feet hovering: a back flip's
+    flight a frame longer than any real one)."""
     frames = len(ankle)
     follow = ankle.copy()
     if rise is not None:
