@@ -160,14 +160,14 @@ def stride_scale(motion: Motion, pelvis: int, speed: float) -> float:
 
 
 FASTEST = 11.0  # m/s: a retimed clip's joints move no faster (real motion capture: ≤ 12.2 m/s)
-BLEND = 0.2  # s: neighbouring clips are cross-faded over this, centred on their boundary …
-BLEND_SPEED = 0.5 * FASTEST  # m/s: … or longer, so the cross-fade alone swings no point faster (the
-# other half left to the clips' own motion) …
-BLEND_MOST = 0.6  # s: … up to this
 QUICKEST = 2.0  # … and no part of it plays more than this much faster than the clip's own pace: a slow
 # part is slow because of the body's weight too (standing up from a landing crouch), not only a hold
 SLOWED_EASE = 0.25  # s of clip time over which a slowed jump's rate eases into its flight's own pace
 RISE_MARGIN = 0.9  # both feet flat on the floor, the pelvis rises no faster than this share of the check's limit
+BLEND = 0.2  # s: neighbouring clips are cross-faded over this, centred on their boundary …
+BLEND_SPEED = 0.5 * FASTEST  # m/s: … or longer, so the cross-fade alone swings no point faster (the
+# other half left to the clips' own motion) …
+BLEND_MOST = 0.6  # s: … up to this
 
 
 def rise_least(flat: np.ndarray, pelvis_y: np.ndarray, frame_time: float) -> np.ndarray:
