@@ -180,7 +180,9 @@ def pin_feet(motion: Motion, feet: list[int], fade: int = 3, terrain=None, conta
         contacts = planted(motion, feet, original_world[0], terrain)
     else:  # only the legs' positions: a long motion's (F, J, 7) never made
         original_world = kinematics_of(motion, legs)
+    clears = [_clearance(motion, original_world, a, terrain) - sole for a in feet]  # the soles as the clips put them
     original = original_world[0]
+    del original_world  # the rotations are not needed again (``original`` is let go below)
     rise = None
     if terrain is not None:  # the ground under each foot relative to the ground under the root,
         # but not in the air (both feet off: the feet go with the body)
@@ -193,8 +195,7 @@ def pin_feet(motion: Motion, feet: list[int], fade: int = 3, terrain=None, conta
     for k, ankle in enumerate(feet):
         target, weight, held = _pins(original[:, ankle], contacts[:, k], fade, terrain,
                                      None if standing is None else standing[k], None if rise is None else rise[k],
-                                     motion.fps, aloft=in_air,
-                                     clear=_clearance(motion, original_world, ankle, terrain) - sole)
+                                     motion.fps, aloft=in_air, clear=clears[k])
         targets.append(target)
         weights.append(weight)
         helds.append(held)
