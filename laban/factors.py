@@ -35,6 +35,7 @@ size or sampling survives (noise does not scale with the figurine).
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -179,17 +180,27 @@ def choose(X: np.ndarray, y: np.ndarray, weights: np.ndarray, groups: np.ndarray
     """The candidate feature set (:data:`CANDIDATES`) and L2 strength (:data:`CS`) whose
     classifiers do best on held-out parts of the TRAINING data (:func:`_folds`: with several
     sources, each source held out in turn — the training data's own cross-procedure test);
-    returns ``(set name, C, every candidate's score, the winner's held-out logits)``."""
+    returns ``(set name, C, every candidate's score, the winner's held-out logits)``.
+
+    Of the candidates within one standard error of the best score (the binomial error of an
+    accuracy over these rows) the simplest wins — the fewest features, then the strongest
+    regularisation (the one-standard-error rule, Hastie, Tibshirani & Friedman, *The Elements
+    of Statistical Learning*, §7.10): scores that close do not tell the candidates apart, and
+    the larger set's edge there is the held-out part's noise (measured: a Weight set of 13
+    features chosen over one of 2 by 0.6416 against 0.6398 read the other procedure 0.05–0.08
+    worse)."""
     fold = _folds(groups, folds, seed)
-    scores, best = {}, None
+    scores, tried = {}, []
     for name, feats in CANDIDATES[factor].items():
         for C in CS:
             logits = _held_out_logits(X, y, weights, fold, feats, C)
             s = _balanced(logits, y, fold)
             scores[f"{name}, C={C:g}"] = round(s, 4)
-            if best is None or s > best[0] + 1e-9:
-                best = (s, name, C, logits)
-    return best[1], best[2], scores, best[3]
+            tried.append((s, len(feats), C, name, logits))
+    top = max(t[0] for t in tried)
+    error = math.sqrt(top * (1.0 - top) / max(len(y), 1))
+    _, _, C, name, logits = min((t for t in tried if t[0] >= top - error), key=lambda t: (t[1], t[2]))
+    return name, C, scores, logits
 
 
 def fit_factors(X: np.ndarray, yt: np.ndarray, yw: np.ndarray, groups: np.ndarray, folds: int = 5,

@@ -393,7 +393,8 @@ def _time_poses(motion: Motion, spans: tuple[int, int, int], lt: float, effector
 
 def _time_rates(motion: Motion, spans: tuple[int, int, int], lt: float, speed: np.ndarray) -> np.ndarray:
     """Time's playback rate (clip seconds per output second) over each clip frame interval:
-    1 outside the anticipation and execution; the anticipation at ``1 − 0.5 L_t`` (Sudden:
+    1 outside the anticipation and execution (and, Sudden, the strokes that repeat the execution,
+    :func:`_repeated_strokes`, played as fast as it is on average); the anticipation at ``1 − 0.5 L_t`` (Sudden:
     longer) or ``1/(1 + 0.5 L_t)`` (Sustained: shorter); the execution ``1 + 2 L_t`` times as
     fast on average, accelerating from ⅔ to 4⁄3 of that (Sudden), or ``1 + 2|L_t|`` times as
     long, evened out — slow parts played relatively faster, ``∝ (v̄/v)^{|L_t|/2}`` of the
@@ -406,6 +407,8 @@ def _time_rates(motion: Motion, spans: tuple[int, int, int], lt: float, speed: n
     u = (np.arange(n) + 0.5) / n
     if lt > 0:
         rate[start:end] = (1 + 2 * lt) * (1 + (2 / 3) * lt * (u[: len(rate[start:end])] - 0.5))
+        for a, b in _repeated_strokes(speed, start, end):
+            rate[a:b] = 1 + 2 * lt
     else:
         v = np.maximum(speed[start:end], 0.1 * speed.max() + 1e-9)
         r = np.power(v.mean() / v, 0.5 * abs(lt))
@@ -413,6 +416,23 @@ def _time_rates(motion: Motion, spans: tuple[int, int, int], lt: float, speed: n
         rate[start:end] = np.minimum(r, 1.0)[: len(rate[start:end])]
         rate = _below_execution(rate, speed, start, end)
     return rate
+
+
+def _repeated_strokes(speed: np.ndarray, start: int, end: int) -> list[tuple[int, int]]:
+    """The strokes that repeat the execution after it, as ``[start, end)`` clip frames, for
+    Sudden to quicken: a wave's swings after the arm is raised, a dance's moves after its
+    first, a jab after an uppercut — the effector's later bursts of speed at least
+    :data:`BURST_SHARE` of the execution's peak, as the execution itself is found. The last
+    of them is the return to rest (the arm lowered, blending into the next action: left at
+    its pace, as :func:`_execution` leaves it), and the pauses between them keep theirs
+    (quick strokes, not a fast-forward). Without this a Sudden wave raised its arm quickly
+    and then waved at the neutral pace, where Sustained slows every stroke
+    (:func:`_below_execution`)."""
+    if end <= start or end >= len(speed):
+        return []
+    moving = speed >= BURST_SHARE * float(speed[start:end].max())
+    moving[:end] = False
+    return [(int(a), int(b)) for a, b in _runs(moving)[:-1]]
 
 
 def _below_execution(rate: np.ndarray, speed: np.ndarray, start: int, end: int) -> np.ndarray:

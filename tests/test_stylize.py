@@ -387,3 +387,36 @@ def test_a_styled_kick_keeps_its_toes_above_the_floor(name, lt, lw):
     clip = CLIPS[name][0]
     after = check(stylize(clip.motion, clip.stages, lt, lw))
     assert after.passes and not after.sinking and not after.hovering, after.summary()
+
+
+def _beat(motion, joint) -> float:
+    """The median time between the acting hand's speed peaks: a wave's or a dance's stroke."""
+    from scipy.signal import find_peaks
+
+    from retarget.effort_signature import speed_profile
+
+    t, v = speed_profile(motion, joint)
+    peaks, _ = find_peaks(v, prominence=0.2 * np.median(v))
+    return float(np.median(np.diff(t[peaks])))
+
+
+@pytest.mark.parametrize("name", ["Dance", "wave-right-hand_normal_001", "wave-both-hands_normal_001"])
+def test_sudden_quickens_every_stroke_of_a_repeated_movement(name):
+    """A Sudden wave waves quickly, not just raises its arm quickly: the strokes that repeat the
+    execution (a wave's swings, a dance's moves) were left at the neutral pace (their beat 0.99–
+    1.03 × the neutral's) while Sustained slowed every one of them."""
+    from retarget.effort_signature import most_moving
+
+    if name in CLIPS:
+        motion, st = CLIPS[name][0].motion, CLIPS[name][0].stages
+    else:
+        path = BANDAI.parent / "dataset-2" / f"dataset-2_{name}.bvh"
+        if not path.exists():
+            pytest.skip("Bandai data not found")
+        motion = read_bvh(path)
+        st = stages(motion)
+    j = most_moving(motion)
+    neutral = _beat(motion, j)
+    assert _beat(stylize(motion, st, 1.0, 0.0), j) < 0.7 * neutral
+    assert _beat(stylize(motion, st, 0.6, 0.0), j) < 0.8 * neutral
+    assert _beat(stylize(motion, st, -1.0, 0.0), j) > 1.5 * neutral
