@@ -167,12 +167,12 @@ def _held_out_logits(X, y, weights, fold, names, C) -> np.ndarray:
     return logits
 
 
-def _balanced(logits: np.ndarray, y: np.ndarray, fold: np.ndarray) -> float:
-    """Balanced accuracy per held-out part, averaged over the parts."""
+def _balanced(logits: np.ndarray, y: np.ndarray, fold: np.ndarray) -> list[tuple[float, int]]:
+    """Per held-out part: its balanced accuracy and its number of rows."""
     pred = np.where(logits >= 0, 1, -1)
-    parts = [np.mean([np.mean(pred[(fold == k) & (y == c)] == c) for c in (-1, 1) if ((fold == k) & (y == c)).any()])
-             for k in np.unique(fold)]
-    return float(np.mean(parts))
+    return [(float(np.mean([np.mean(pred[(fold == k) & (y == c)] == c) for c in (-1, 1)
+                            if ((fold == k) & (y == c)).any()])), int((fold == k).sum()))
+            for k in np.unique(fold)]
 
 
 def choose(X: np.ndarray, y: np.ndarray, weights: np.ndarray, groups: np.ndarray, factor: str, folds: int = 5,
@@ -182,24 +182,35 @@ def choose(X: np.ndarray, y: np.ndarray, weights: np.ndarray, groups: np.ndarray
     sources, each source held out in turn — the training data's own cross-procedure test);
     returns ``(set name, C, every candidate's score, the winner's held-out logits)``.
 
+    With several sources a candidate's score is its WORST held-out source's balanced accuracy:
+    the model must carry to a procedure (a real performer) it never saw, and the mean of two
+    or three sources rewards a candidate that reads one of them very well and another near
+    chance (measured: a Weight set of 13 features read the generator 0.73 and the stylisation
+    operators 0.56, and in one draw of the presentations won on the mean, 0.651 against 0.638,
+    over a set of 2 that read them 0.66 and 0.63). This is the worst-domain
+    criterion of distributionally robust learning (Sagawa, Koh, Hashimoto & Liang 2020,
+    "Distributionally robust neural networks for group shifts", ICLR; for choosing models by
+    held-out domains, Gulrajani & Lopez-Paz 2021, "In search of lost domain generalization",
+    ICLR). With one source, folds of whole groups are pooled: the mean.
+
     Of the candidates within one standard error of the best score (the binomial error of an
-    accuracy over these rows) the simplest wins — the fewest features, then the strongest
-    regularisation (the one-standard-error rule, Hastie, Tibshirani & Friedman, *The Elements
-    of Statistical Learning*, §7.10): scores that close do not tell the candidates apart, and
-    the larger set's edge there is the held-out part's noise (measured: a Weight set of 13
-    features chosen over one of 2 by 0.6416 against 0.6398 read the other procedure 0.05–0.08
-    worse)."""
+    accuracy over the scoring part's rows) the simplest wins — the fewest features, then the
+    strongest regularisation (the one-standard-error rule, Hastie, Tibshirani & Friedman, *The
+    Elements of Statistical Learning*, §7.10): scores that close do not tell the candidates
+    apart."""
     fold = _folds(groups, folds, seed)
+    by_source = len(np.unique(_sources(groups))) > 1
     scores, tried = {}, []
     for name, feats in CANDIDATES[factor].items():
         for C in CS:
             logits = _held_out_logits(X, y, weights, fold, feats, C)
-            s = _balanced(logits, y, fold)
+            parts = _balanced(logits, y, fold)
+            s, n = min(parts) if by_source else (float(np.mean([a for a, _ in parts])), len(y))
             scores[f"{name}, C={C:g}"] = round(s, 4)
-            tried.append((s, len(feats), C, name, logits))
-    top = max(t[0] for t in tried)
-    error = math.sqrt(top * (1.0 - top) / max(len(y), 1))
-    _, _, C, name, logits = min((t for t in tried if t[0] >= top - error), key=lambda t: (t[1], t[2]))
+            tried.append((s, n, len(feats), C, name, logits))
+    top = max(tried, key=lambda t: t[0])
+    error = math.sqrt(top[0] * (1.0 - top[0]) / max(top[1], 1))
+    _, _, _, C, name, logits = min((t for t in tried if t[0] >= top[0] - error), key=lambda t: (t[2], t[3]))
     return name, C, scores, logits
 
 

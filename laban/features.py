@@ -368,7 +368,8 @@ def sequence(
 # Time by the duration and the timing of a stroke).
 #
 # Strokes: the movement is cut at its speed minima into strokes (speed peaks of at least 30 %
-# of the largest, standing out by 15 % of it) and each stroke is measured on its own, the
+# of its fast speed — the 90th percentile, not the single fastest moment, so that one accent
+# does not make a phrase's other strokes into wobbles — standing out by 15 % of it) and each stroke is measured on its own, the
 # measures averaged weighted by the strokes' kinetic energy: a walk's steps or a wave's
 # swings are strokes however far the body travels, where the segment's extent would grow
 # with the distance walked. The "Stroke" Weight features are free of tempo as well as size
@@ -382,7 +383,8 @@ def sequence(
 EFFORT_RATE = 120.0  # Hz, the grid every segment is brought to
 EFFORT_SIGMA = 0.04  # s, Gaussian low-pass (and derivative) width
 ACTIVE = 0.1  # the movement is where the speed is above this share of its peak
-STROKE_FLOOR = 0.3  # a stroke is a speed peak above this share of the segment's peak ...
+STROKE_TOP = 0.9  # the segment's fast speed: this quantile of its speed ...
+STROKE_FLOOR = 0.3  # ... a stroke is a speed peak above this share of it ...
 STROKE_DIP = 0.5  # ... with a prominence of this share of that floor
 
 EFFORT_SOURCES: dict[str, str] = {
@@ -427,7 +429,7 @@ EFFORT_SOURCES: dict[str, str] = {
     "Light Glide": "log(RMS |a| · active duration / RMS |v|): acceleration relative to speed, the "
                    "movement's own time-scale removed. Weight: Light is buoyant, low acceleration "
                    "for its speed (Laban & Lawrence 1947; Chi et al. 2000).",
-    "Stroke Rate": "log(1 + strokes per second): speed peaks above 30 % of the largest, apart from "
+    "Stroke Rate": "log(1 + strokes per second): speed peaks above 30 % of its fast speed, apart from "
                    "each other. Time (Sudden repeats quick strokes) and Weight (Strong phrases "
                    "accents; Fdili Alaoui et al. 2017).",
     # per stroke (a speed peak between the speed minima around it, see _stroke_table), averaged
@@ -511,11 +513,15 @@ def _effort_signal(t: np.ndarray, p: np.ndarray) -> tuple:
 
 
 def _stroke_peaks(speed: np.ndarray) -> np.ndarray:
-    """Indices of the speed peaks of at least STROKE_FLOOR of the largest that stand out by a
-    prominence of STROKE_DIP of it (a dip between strokes, not a wobble); at least the largest."""
+    """Indices of the speed peaks of at least STROKE_FLOOR of the segment's fast speed (its
+    STROKE_TOP quantile) that stand out by a prominence of STROKE_DIP of that floor (a dip
+    between strokes, not a wobble); at least the largest. The fast speed, not the peak: with
+    the largest peak as the scale, a Sudden wave's one quick raise (3.7 m/s) put its swings
+    (1.0-1.6 m/s) under the floor, and the strokes between the floor's peaks ran over several
+    swings each (1.1-1.6 s "strokes" in a movement of 0.2 s swings)."""
     from doodle.core.peaks import find_peaks  # scipy.signal's, without its import
 
-    top = float(speed.max())
+    top = _quantiles(speed, (STROKE_TOP,))[0][0]
     padded = np.concatenate([[0.0], speed, [0.0]])  # a movement starting or ending fast still peaks
     peaks, _ = find_peaks(padded, height=STROKE_FLOOR * top, prominence=STROKE_DIP * STROKE_FLOOR * top)
     peaks = np.clip(peaks - 1, 0, len(speed) - 1)

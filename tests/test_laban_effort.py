@@ -248,3 +248,24 @@ def test_a_factor_a_procedure_did_not_give_is_left_out_of_its_fit():
     assert report["time"]["held_out"] == "sources"
     assert np.mean((got["time"].probability(X[:100]) >= 0.5) == (yt[:100] > 0)) > 0.9
     assert np.mean((got["weight"].probability(X) >= 0.5) == (yw > 0)) > 0.9
+
+
+def test_the_worst_held_out_source_chooses_the_features(monkeypatch):
+    """Of two candidate sets, one reads source a perfectly and source b barely (a better MEAN
+    over the two sources held out in turn), the other reads both fairly: the model must carry
+    to a procedure it never saw, so the second is chosen."""
+    from laban import factors
+
+    rng = np.random.default_rng(3)
+    n = 400
+    y = np.tile([-1, 1], n)
+    source = np.repeat(["a", "b"], n)
+    X = rng.normal(size=(2 * n, len(EFFORT_NAMES)))
+    one, both = EFFORT_NAMES.index("Stroke Peakedness"), EFFORT_NAMES.index("Energy Spread")
+    X[:, one] += np.where(source == "a", 6.0, 0.25) * y  # near perfect in a, about 0.6 in b
+    X[:, both] += 0.7 * y  # about 0.7 in both
+    groups = np.array([f"{s}/clip{i % 10}" for i, s in enumerate(source)])
+    monkeypatch.setitem(factors.CANDIDATES, "weight", {"one source": ("Stroke Peakedness",),
+                                                       "both sources": ("Energy Spread",)})
+    name, _, scores, _ = factors.choose(X, y, np.ones(2 * n), groups, "weight")
+    assert name == "both sources", scores
