@@ -29,6 +29,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from doodle.core.filters import gaussian_filter1d
+from doodle.core.profiles import FASTEST  # noqa: F401 (the animation stages read it from here)
 from doodle.core.splines import CubicSpline
 from retarget.analysis import guess_roles
 from retarget.skeleton import Motion, forward_kinematics
@@ -36,7 +37,6 @@ from retarget.skeleton import Motion, forward_kinematics
 RATE = 120.0  # Hz: effector paths are compared at this rate
 SMOOTH = 1 / 30  # s: ... low-passed over this much time (one frame of a 30 fps clip)
 HALF = 0.5  # the execution burst: speed at least this share of the peak
-FASTEST = 12.0  # m/s: real hands and feet reach 10–12 (DeepMimic run 12.2, spinkick 11.1; Bandai dash 10.2)
 END_ROLES = ("right_hand", "left_hand", "right_foot", "left_foot")
 
 

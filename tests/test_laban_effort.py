@@ -93,6 +93,23 @@ def test_emote_timing_keeps_the_path_and_changes_its_timing():
     assert strong[1][:, 0].min() < p[:, 0].min() - 0.005  # the anticipation
 
 
+def test_emote_timing_never_moves_faster_than_people_do():
+    """A fast neutral stroke (a 0.8 m punch in 0.3 s, 5 m/s at its peak) made Sudden Strong:
+    its duration shortened no further than keeps it under the fastest real hands (12 m/s),
+    where the factor alone took it to 17-23 m/s."""
+    from doodle.core.profiles import FASTEST
+
+    t = np.linspace(0.0, 0.3, 28)
+    u = t / 0.3
+    p = np.column_stack([0.8 * (10 * u**3 - 15 * u**4 + 6 * u**5), 0 * t, 0 * t])
+    q = np.tile([0.0, 0.0, 0.0, 1.0], (len(t), 1))
+    for seed in range(4):
+        tt, pp, _ = emote(t, p, q, 1, 1, np.random.default_rng(seed))
+        speed = np.linalg.norm(np.diff(pp, axis=0), axis=1) / np.diff(tt)
+        assert speed.max() <= FASTEST * 1.02
+        assert tt[-1] < t[-1]  # still Sudden: quicker than the neutral
+
+
 @pytest.mark.parametrize("lw", [1, pytest.param(-1, marks=pytest.mark.xfail(
     strict=True, reason="the shipped model reads this 1 s stroke's Sudden Light rendition (0.45 s, flat-topped) "
                         "as Sustained (P(Sudden) 0.19): it judges tempo in absolute terms"))])
