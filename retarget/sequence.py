@@ -231,7 +231,8 @@ def shortest(motion: Motion, clip_in: float = 0.0, clip_out: float | None = None
 
 
 def paced(motion: Motion, clip_in: float, clip_out: float | None, duration: float,
-          limit: float = FASTEST, natural: tuple | None = None) -> tuple[np.ndarray, np.ndarray]:
+          limit: float = FASTEST, natural: tuple | None = None,
+          raised: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """A one-shot clip's range retimed to last ``duration`` seconds (§5.3: ``T_P/T_A``)
     without any joint going faster than ``limit``: where a uniform squeeze would, the slow
     parts of the clip (holds, wind-ups) are squeezed more and the fast ones less. Returns
@@ -241,7 +242,11 @@ def paced(motion: Motion, clip_in: float, clip_out: float | None, duration: floa
     part plays more than :data:`QUICKEST` times its own pace unless the clip cannot otherwise
     fit its span (no room was left around it): then only the joints' ``limit`` holds, and
     if even that leaves no time for the flight at its own pace, the flight plays quicker too
-    (a hop performed in 0.6 s: squeezed evenly, the take-off swung the arms at 18 m/s)."""
+    (a hop performed in 0.6 s: squeezed evenly, the take-off swung the arms at 18 m/s).
+    ``raised``: per clip frame, a foot off the ground (the clip's contacts): slowed to fill a
+    long span, the clip plays those frames at its own pace too, and its stances take the
+    time (:func:`_slowed_around`) — unless they would play slower than half their pace (the
+    mirror of :data:`QUICKEST`): then all but the flight is slowed."""
     end = (motion.frames - 1) * motion.frame_time if clip_out is None else clip_out
     knots, step, least = _limits(motion, clip_in, clip_out, limit, natural)
     if least.sum() >= duration:
@@ -250,8 +255,17 @@ def paced(motion: Motion, clip_in: float, clip_out: float | None, duration: floa
         knots, step, least = _limits(motion, clip_in, clip_out, limit, None, quickest=np.inf)  # a quicker flight
     if len(knots) < 3 or duration <= 0:
         return np.array([0.0, 1.0]), np.array([clip_in, end])
-    if natural is not None and duration > end - clip_in:  # slowed: the flight at its own pace all the same
-        slowed = _slowed_around(knots, step, natural, duration)
+    if duration > end - clip_in and (natural is not None or raised is not None):  # slowed: feet up at own pace
+        flight = np.zeros(len(step), dtype=bool)
+        if natural is not None:
+            flight = (knots[1:] > natural[0] + 1e-9) & (knots[:-1] < natural[1] - 1e-9)
+        up = flight.copy()
+        if raised is not None and len(raised):
+            f = np.clip(np.rint(knots / motion.frame_time).astype(int), 0, len(raised) - 1)
+            up |= raised[f[:-1]] | raised[f[1:]]
+        slowed = _slowed_around(knots, step, up, duration, slowest=1.0 / QUICKEST) if up.any() else None
+        if slowed is None and flight.any():  # the stances too short to take it all: only the flight kept
+            slowed = _slowed_around(knots, step, flight, duration)
         if slowed is not None:
             return slowed, knots
     speed_max = float((least / np.maximum(step, 1e-12)).max()) * limit
@@ -271,22 +285,29 @@ def paced(motion: Motion, clip_in: float, clip_out: float | None, duration: floa
     return u, knots
 
 
-def _slowed_around(knots: np.ndarray, step: np.ndarray, natural: tuple, duration: float) -> np.ndarray | None:
+def _slowed_around(knots: np.ndarray, step: np.ndarray, keep: np.ndarray, duration: float,
+                   slowest: float = 0.0) -> np.ndarray | None:
     """Pacing knots (span fractions at ``knots``) for a clip range played slower than its own
-    pace over ``duration``: the flight (clip times ``natural``) at its own pace — slowed
-    evenly, a performer's long-held jump hung in the air — and the rest slowed to fill the
-    span, the rate eased into the flight's over :data:`SLOWED_EASE` of clip time. None when
-    no step is outside it."""
-    mid = (knots[1:] + knots[:-1]) / 2
-    away = np.maximum(natural[0] - mid, mid - natural[1])
-    inside = (knots[1:] > natural[0] + 1e-9) & (knots[:-1] < natural[1] - 1e-9)
-    if not inside.any() or inside.all():
+    pace over ``duration``: the steps ``keep`` (a flight, a foot raised) at their own pace —
+    slowed evenly, a performer's long-held jump hung in the air and a slow performer's Get
+    Angry held its stamping foot 22 cm up, nearly still, for 0.57 s — and the rest
+    slowed to fill the span, the rate eased into the kept steps' over :data:`SLOWED_EASE` of
+    clip time. None when no step, or every step, is kept, or when the rest would play slower
+    than ``slowest`` times its own pace (a kick whose foot is up nearly all the clip: its few
+    standing frames would freeze)."""
+    if not keep.any() or keep.all():
         return None
-    w = np.where(inside, 0.0, _smoothstep(np.clip(away / SLOWED_EASE, 0.0, 1.0)))
-    lo, hi = 1e-6, 1.0  # the rate away from the flight, by bisection: the clip fills the span
+    mid = (knots[1:] + knots[:-1]) / 2
+    away = np.abs(mid[:, None] - mid[keep][None, :]).min(axis=1)  # clip time to the nearest kept step
+    w = np.where(keep, 0.0, _smoothstep(np.clip(away / SLOWED_EASE, 0.0, 1.0)))
+    if not (w > 0).any():
+        return None
+    lo, hi = 1e-6, 1.0  # the rate away from the kept steps, by bisection: the clip fills the span
     for _ in range(60):
         r = (lo + hi) / 2
         lo, hi = (r, hi) if np.sum(step / (1.0 + (r - 1.0) * w)) > duration else (lo, r)
+    if hi < slowest:
+        return None
     out = step / (1.0 + (hi - 1.0) * w)
     return np.concatenate([[0.0], np.cumsum(out)]) / out.sum()
 

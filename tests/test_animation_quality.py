@@ -127,6 +127,33 @@ def test_pacing_keeps_joints_under_the_limit_and_the_flight_at_its_own_pace():
     assert rate.min() > 0.5 and np.abs(np.diff(rate)).max() < 0.1  # the rest slowed evenly, eased (no lurch)
 
 
+
+@pytest.mark.parametrize("name,slower", [("Get Angry", 1.4), ("Stomp", 1.3), ("Kick", 1.6)])
+def test_a_slowed_action_keeps_its_raised_foot_at_its_own_pace(name, slower):
+    """A one-shot slowed to fill a long segment (a slow performer's) plays the frames where a
+    foot is off the ground at the clip's own pace and lets its stances take the time: slowed
+    evenly, a Get Angry held its stamping foot 22 cm up, nearly still, for 0.57 s (the check's
+    held foot, 0.5 s). Not where the stances would freeze (a Kick's foot is up nearly all the
+    clip): then it is slowed evenly, as before."""
+    from retarget.sequence import paced
+
+    c = _clip(name)
+    m = c.motion
+    raised = ~c.contacts.all(axis=1)
+    assert raised.any() and not raised.all()
+    end = (m.frames - 1) * m.frame_time
+    long = slower * end
+    u, knots = paced(m, 0.0, None, long, 11.0, None, raised)
+    assert u[0] == 0.0 and u[-1] == pytest.approx(1.0) and np.all(np.diff(u) > 0)
+    f = np.rint(knots / m.frame_time).astype(int)
+    up = raised[f[:-1]] | raised[f[1:]]
+    rate = np.diff(knots) / (np.diff(u) * long)  # clip seconds per second played
+    if name == "Kick":
+        assert np.allclose(rate, 1.0 / slower)
+        return
+    assert np.allclose(rate[up], 1.0)
+    assert 0.5 <= rate.min() < 1.0 / slower and np.abs(np.diff(rate)).max() < 0.15  # the stances slowed, eased
+
 def test_a_foot_the_blends_shuffle_takes_a_step_and_does_not_slide():
     """A standing pose whose right foot the motion drags 30 cm along the floor in three
     frames: pinned, the foot stands, then steps in an arc over a step's time."""

@@ -355,7 +355,7 @@ def sequenced(track, segments, choices, times, skeleton, rest, scale, terrain, o
     limits = [speed_limit(pc, _jump_travel(pc.span, track, scale)) for pc in pieces]
     pieces = make_room(pieces, track.t, limits, [c.clip.stages for c in choices])
     pieces = [replace(pc, pace=paced(pc.motion, pc.clip_in, pc.clip_out, pc.span.t1 - pc.span.t0, limit,
-                                     flight_times(pc)))
+                                     flight_times(pc), None if pc.contacts is None else ~pc.contacts.all(axis=1)))
               if pc.cycles == 0 and pc.progress is None and pc.gesture is None else pc
               for pc, limit in zip(pieces, limits)]
     pieces = [replace(pc, span=in_flight(pc)) if pc.span.jumping else pc for pc in pieces]
