@@ -19,8 +19,9 @@ curve — energy concentration, force and impact; sources in
 chosen on the training data alone (:func:`choose`): when it holds several sources (the
 generator, EMOTE-style timing, the stylisation operators) each source is held out in turn and
 scored by a classifier trained on the others — the training data's own cross-procedure test,
-so the choice favours what the procedures agree on rather than one procedure's habits; with a
-single source, folds of whole performers or clips. Each source weighs the same in the fit.
+the worst source deciding, so the choice favours what the procedures agree on rather than one
+procedure's habits; with a single source, folds of whole performers or clips; near-ties go to
+the simpler candidate. Each source weighs the same in the fit.
 No model chooses its features or regularisation on data it is then tested on (an earlier
 version picked its features by the cross-procedure test figures themselves). The candidate
 sets were written while the cross-procedure figures were in view, though, so those figures
@@ -187,11 +188,11 @@ def choose(X: np.ndarray, y: np.ndarray, weights: np.ndarray, groups: np.ndarray
     or three sources rewards a candidate that reads one of them very well and another near
     chance (measured: a Weight set of 13 features read the generator 0.73 and the stylisation
     operators 0.56, and in one draw of the presentations won on the mean, 0.651 against 0.638,
-    over a set of 2 that read them 0.66 and 0.63). This is the worst-domain
-    criterion of distributionally robust learning (Sagawa, Koh, Hashimoto & Liang 2020,
-    "Distributionally robust neural networks for group shifts", ICLR; for choosing models by
-    held-out domains, Gulrajani & Lopez-Paz 2021, "In search of lost domain generalization",
-    ICLR). With one source, folds of whole groups are pooled: the mean.
+    over a set of 2 that read them 0.66 and 0.63). This is the worst-domain criterion of
+    distributionally robust learning (Sagawa, Koh, Hashimoto & Liang 2020, "Distributionally
+    robust neural networks for group shifts", ICLR; for choosing models by held-out domains,
+    Gulrajani & Lopez-Paz 2021, "In search of lost domain generalization", ICLR). With one
+    source, folds of whole groups are pooled: the mean.
 
     Of the candidates within one standard error of the best score (the binomial error of an
     accuracy over the scoring part's rows) the simplest wins — the fewest features, then the

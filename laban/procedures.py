@@ -136,7 +136,8 @@ def emote(t: np.ndarray, p: np.ndarray, q: np.ndarray, time: int, weight: int, r
         u = np.linspace(0.0, 1.0, 1024)
         s, factor, over = _profile(u, time, weight, strength, rng)
         new = duration * factor
-        new = max(new, min(length * float(np.abs(np.gradient(s, u)).max()) / FASTEST, duration))  # see FASTEST
+        fastest = length * float(np.abs(np.gradient(s, u)).max())  # m/s over one second: no faster than people
+        new = max(new, min(fastest / FASTEST, duration))
         extra = 0.1 * new if over > 0 else 0.0  # the return after the overshoot
         n = max(3, int(round((new + extra) * rate)) + 1)
         w = np.linspace(0.0, new + extra, n)[1:]

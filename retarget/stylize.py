@@ -393,13 +393,14 @@ def _time_poses(motion: Motion, spans: tuple[int, int, int], lt: float, effector
 
 def _time_rates(motion: Motion, spans: tuple[int, int, int], lt: float, speed: np.ndarray) -> np.ndarray:
     """Time's playback rate (clip seconds per output second) over each clip frame interval:
-    1 outside the anticipation and execution (and, Sudden, the strokes that repeat the execution,
-    :func:`_repeated_strokes`, played as fast as it is on average); the anticipation at ``1 − 0.5 L_t`` (Sudden:
-    longer) or ``1/(1 + 0.5 L_t)`` (Sustained: shorter); the execution ``1 + 2 L_t`` times as
-    fast on average, accelerating from ⅔ to 4⁄3 of that (Sudden), or ``1 + 2|L_t|`` times as
-    long, evened out — slow parts played relatively faster, ``∝ (v̄/v)^{|L_t|/2}`` of the
-    effector's speed ``v`` — and nowhere faster than the neutral (Sustained) (eq. 5.3's
-    intent, without its power law's stop at the execution's start)."""
+    1 outside the anticipation and execution (and, Sudden, the strokes that repeat the
+    execution, :func:`_repeated_strokes`, played as fast as it is on average); the
+    anticipation at ``1 − 0.5 L_t`` (Sudden: longer) or ``1/(1 + 0.5 L_t)`` (Sustained:
+    shorter); the execution ``1 + 2 L_t`` times as fast on average, accelerating from ⅔ to
+    4⁄3 of that (Sudden), or ``1 + 2|L_t|`` times as long, evened out — slow parts played
+    relatively faster, ``∝ (v̄/v)^{|L_t|/2}`` of the effector's speed ``v`` — and nowhere
+    faster than the neutral (Sustained) (eq. 5.3's intent, without its power law's stop at
+    the execution's start)."""
     ant, start, end = spans
     rate = np.ones(motion.frames - 1)
     rate[ant:start] = 1.0 - 0.5 * lt if lt >= 0 else 1.0 / (1.0 + 0.5 * lt)
