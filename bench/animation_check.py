@@ -128,8 +128,8 @@ def performers(seeds=(3, 11)) -> None:
     print("\n".join(failures))
 
 
-HELD_OUT = 36  # the performers' take the figures below are read on: none of the animation fixes were designed
-# on it (they were on takes 21, 33 and 34)
+HELD_OUT = 37  # the performers' take the figures below are read on: none of the animation fixes were designed
+# on it (they were on takes 21, 33, 34 and 36)
 
 
 def actions_alone(seed: int = HELD_OUT) -> None:

@@ -64,7 +64,8 @@ def main() -> None:
 
 def cross_procedure() -> None:
     """``python -m bench.laban_effort``'s last table: see :mod:`doodle.app.effort_corpus`."""
-    from doodle.app.effort_corpus import MOCAP, cross_procedure as run, proxy_table, reliability, styled_proxy, table
+    from doodle.app.effort_corpus import HELD_OUT, MOCAP, cross_procedure as run, held_out, proxy_table, reliability, \
+        styled_proxy, table
 
     if not MOCAP.is_dir():
         print(f"Cross-procedure Effort accuracy: motion capture not found under {MOCAP}")
@@ -77,6 +78,13 @@ def cross_procedure() -> None:
           f"Weight {rel['weight']['ece']:.3f}  ({time.perf_counter() - start:.0f} s)")
     for run in rep["runs"]:
         print(f"  {run['name']}: chose Time {run['chosen']['time']}; Weight {run['chosen']['weight']}")
+    if HELD_OUT.is_dir():
+        start = time.perf_counter()
+        rep = held_out(MOCAP)
+        print("\n".join(table(rep, f"Held-out clips: trained on one procedure applied to every Bandai clip, tested on "
+                                    f"both applied to the {len(rep['clips'])} {HELD_OUT.name} clips (no Effort choice "
+                                    "was made on them")))
+        print(f"  ({time.perf_counter() - start:.0f} s)")
     model = load()
     print("\n".join(proxy_table(styled_proxy(model.factors, model.threshold, root=MOCAP))))
 

@@ -162,7 +162,7 @@ def stride_scale(motion: Motion, pelvis: int, speed: float) -> float:
 FASTEST = 11.0  # m/s: a retimed clip's joints move no faster (real motion capture: ≤ 12.2 m/s)
 QUICKEST = 2.0  # … and no part of it plays more than this much faster than the clip's own pace: a slow
 # part is slow because of the body's weight too (standing up from a landing crouch), not only a hold
-SLOWED_EASE = 0.25  # s of clip time over which a slowed jump's rate eases into its flight's own pace
+SLOWED_EASE = 0.25  # s of clip time over which a slowed clip's rate eases into its flight's or raised foot's own pace
 RISE_MARGIN = 0.9  # both feet flat on the floor, the pelvis rises no faster than this share of the check's limit
 BLEND = 0.2  # s: neighbouring clips are cross-faded over this, centred on their boundary …
 BLEND_SPEED = 0.5 * FASTEST  # m/s: … or longer, so the cross-fade alone swings no point faster (the
@@ -201,9 +201,14 @@ def _limits(motion: Motion, clip_in: float, clip_out: float | None, limit: float
     least = step * np.clip(speed / limit, 1.0 / quickest, 1.0)  # never slower than the clip's own pace
     least = np.maximum(least, step * _rise_share(motion)[f0:f1])  # nor jerked up out of a crouch
     if natural is not None:  # a flight lasts as long as it does
-        inside = (knots[1:] > natural[0] + 1e-9) & (knots[:-1] < natural[1] - 1e-9)
+        inside = _within(knots, natural)
         least[inside] = step[inside]
     return knots, step, least
+
+
+def _within(knots: np.ndarray, interval: tuple) -> np.ndarray:
+    """Per step between ``knots`` (clip times), whether it overlaps ``interval`` (clip times)."""
+    return (knots[1:] > interval[0] + 1e-9) & (knots[:-1] < interval[1] - 1e-9)
 
 
 @per_motion
@@ -256,15 +261,13 @@ def paced(motion: Motion, clip_in: float, clip_out: float | None, duration: floa
     if len(knots) < 3 or duration <= 0:
         return np.array([0.0, 1.0]), np.array([clip_in, end])
     if duration > end - clip_in and (natural is not None or raised is not None):  # slowed: feet up at own pace
-        flight = np.zeros(len(step), dtype=bool)
-        if natural is not None:
-            flight = (knots[1:] > natural[0] + 1e-9) & (knots[:-1] < natural[1] - 1e-9)
+        flight = _within(knots, natural) if natural is not None else np.zeros(len(step), dtype=bool)
         up = flight.copy()
         if raised is not None and len(raised):
             f = np.clip(np.rint(knots / motion.frame_time).astype(int), 0, len(raised) - 1)
             up |= raised[f[:-1]] | raised[f[1:]]
-        slowed = _slowed_around(knots, step, up, duration, slowest=1.0 / QUICKEST) if up.any() else None
-        if slowed is None and flight.any():  # the stances too short to take it all: only the flight kept
+        slowed = _slowed_around(knots, step, up, duration, slowest=1.0 / QUICKEST) if (up & ~flight).any() else None
+        if slowed is None:  # no foot up but in the flight, or the stances too short to take it all
             slowed = _slowed_around(knots, step, flight, duration)
         if slowed is not None:
             return slowed, knots

@@ -189,6 +189,32 @@ def test_cross_procedure_evaluation_on_two_halves(tmp_path, monkeypatch):
     assert sum(map(sum, conf["emote → stylize"])) == sum(r["test"] for r in rep["runs"][:2])
 
 
+
+def test_held_out_clips_are_tested_on_both_procedures(tmp_path, monkeypatch):
+    """Trained on one procedure applied to every clip of one folder, tested on both applied to
+    the clips of another (named anything): four runs, each on clips it never saw."""
+    import shutil
+    from pathlib import Path
+
+    from doodle.app import effort_corpus as ec
+
+    clips = Path(__file__).resolve().parents[1] / "library" / "builtin" / "clips"
+    (tmp_path / "train" / "one").mkdir(parents=True)
+    (tmp_path / "test").mkdir()
+    for n in ("punch", "greet"):
+        shutil.copy(clips / f"{n}.bvh", tmp_path / "train" / "one" / f"one_{n}_normal_001.bvh")
+    for n in ("slap", "throw"):
+        shutil.copy(clips / f"{n}.bvh", tmp_path / "test" / f"{n}.bvh")
+    generator = ec.generator_items
+    monkeypatch.setattr(ec, "generator_items", lambda part="train": generator(part, people=1))
+    rep = ec.held_out(tmp_path / "train", tmp_path / "test", variants=1, rates=(30.0,), scales={"human": 1.0})
+    assert rep["clips"] == ["slap", "throw"]
+    assert set(rep["pooled"]) == {"emote → emote", "emote → stylize", "stylize → emote", "stylize → stylize"}
+    for run in rep["runs"]:
+        cell = run["cells"]["human @ 30 Hz"]
+        assert 0 <= cell["state"] <= min(cell["time"], cell["weight"]) <= 1 and cell["n"] == run["test"] > 0
+    assert any("Held" in line for line in ec.table(rep, "Held-out clips (test"))
+
 def _rest_stroke(duration, shape="minjerk", rate=90.0, pause=0.5):
     """Rest, one stroke of ``duration`` s whose speed is a minimum-jerk bell, a peaked
     ``sin^6`` (energy packed in the peak) or a flat-topped ``sin^0.8``, rest."""
