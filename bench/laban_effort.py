@@ -64,7 +64,7 @@ def main() -> None:
 
 def cross_procedure() -> None:
     """``python -m bench.laban_effort``'s last table: see :mod:`doodle.app.effort_corpus`."""
-    from doodle.app.effort_corpus import HELD_OUT, MOCAP, cross_procedure as run, held_out, proxy_table, reliability, \
+    from doodle.app.effort_corpus import HELD_OUT, MOCAP, cross_procedure as run, held_out, held_out_title, proxy_table, reliability, \
         styled_proxy, table
 
     if not MOCAP.is_dir():
@@ -81,9 +81,7 @@ def cross_procedure() -> None:
     if HELD_OUT.is_dir():
         start = time.perf_counter()
         rep = held_out(MOCAP)
-        print("\n".join(table(rep, f"Held-out clips: trained on one procedure applied to every Bandai clip, tested on "
-                                    f"both applied to the {len(rep['clips'])} {HELD_OUT.name} clips (no Effort choice "
-                                    "was made on them")))
+        print("\n".join(table(rep, held_out_title(rep))))
         print(f"  ({time.perf_counter() - start:.0f} s)")
     model = load()
     print("\n".join(proxy_table(styled_proxy(model.factors, model.threshold, root=MOCAP))))

@@ -242,7 +242,8 @@ def held_out(root=None, test_root=None, seed: int = 0, variants: int = 2, thresh
     tests = {p: [it for it in make(test_clips, seed, variants) if it.time and it.weight]
              for p, make in procedures.items()}
     generator = generator_items("train")
-    report = {"clips": [c.name for c in test_clips], "threshold": threshold, "scales": dict(scales),
+    report = {"clips": [c.name for c in test_clips], "trained_on": str(root or MOCAP),
+              "tested_on": str(test_root or HELD_OUT), "threshold": threshold, "scales": dict(scales),
               "rates": list(rates), "runs": []}
     for k, (train_proc, make) in enumerate(procedures.items()):
         factors = train_factors(generator + make(train_clips, seed, variants), seed=seed)
@@ -253,6 +254,13 @@ def held_out(root=None, test_root=None, seed: int = 0, variants: int = 2, thresh
                                    "group": f"{train_proc} → {test_proc}", "test": len(items), "cells": cells})
     report["pooled"] = pooled(report)
     return report
+
+
+def held_out_title(report: dict) -> str:
+    """The title of :func:`held_out`'s table."""
+    return (f"Held-out clips: trained on one procedure applied to every clip of {Path(report['trained_on']).name}, "
+            f"tested on both applied to the {len(report['clips'])} clips of {Path(report['tested_on']).name} (no "
+            "Effort choice was made on them)")
 
 
 def pooled(report: dict) -> dict:

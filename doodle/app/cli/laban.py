@@ -44,6 +44,10 @@ def add_arguments(p) -> None:
     q.add_argument("--mocap", metavar="DIR",
                    help="neutral motion capture for the cross-procedure tables (default, when no files are given: "
                         "the Bandai clips beside the project, if present)")
+    q.add_argument("--held-out", metavar="DIR",
+                   help="clips of other people (any *.bvh) for the protocol on movement nothing was chosen on: "
+                        "trained on every --mocap clip, tested on these (default, with the default --mocap: the "
+                        "DeepMimic clips beside the Bandai ones, if present)")
     q.add_argument("--no-cross", action="store_true", help="skip the cross-procedure tables (they take minutes)")
     q.add_argument("--json", action="store_true", help="print the report as JSON")
     q.set_defaults(run=cmd_eval)
@@ -170,9 +174,13 @@ def cmd_eval(args) -> int:
     curves = labelled(args.files, args.track) if args.files else generated("test", people=args.people)
     report = evaluate(model, curves)
     report["data"] = [str(f) for f in args.files] or "generated held-out performers (laban.train.DEFAULT_DATA['test'])"
+    held_folder = _held_out_folder(args)  # a bad --held-out refused before minutes of work
     cross = _cross(args)
+    held = _held_out(args, held_folder) if cross is not None and held_folder else None
     if cross is not None:
         report["cross_procedure"] = cross
+        if held is not None:
+            report["held_out"] = held
         report["styled_proxy"] = _proxy(args, model)
     pictures = []
     with atomic_files() as staged:  # the pictures and report.json together, or none
@@ -181,11 +189,12 @@ def cmd_eval(args) -> int:
                                                 ("states", "state_confusion", STATES, "States (Time + Weight)")):
                 pictures.append(str(out / f"{method}_{kind}.png"))
                 confusion_png(r[matrix], list(labels), staged(pictures[-1]), f"{method}: {title}")
-        if cross is not None:
-            for group, matrix in cross["state_confusion"].items():
+        for prefix, title, rep in (("cross", "cross-procedure", cross), ("held_out", "held-out clips", held)):
+            for group, matrix in (rep or {}).get("state_confusion", {}).items():
                 name = group.replace(" → ", "_to_").replace(" ", "_")
-                pictures.append(str(out / f"cross_{name}_states.png"))
-                confusion_png(matrix, list(STATES), staged(pictures[-1]), f"cross-procedure {group}: States")
+                pictures.append(str(out / f"{prefix}_{name}_states.png"))
+                confusion_png(matrix, list(STATES), staged(pictures[-1]), f"{title} {group}: States")
+        if cross is not None:
             pictures.append(str(out / "reliability.png"))
             reliability_png(cross["reliability"], staged(pictures[-1]))
         report["pictures"] = pictures
@@ -198,12 +207,14 @@ def cmd_eval(args) -> int:
     for method, r in report["methods"].items():
         print(f"  {method:<12} " + " ".join(f"{r[k]:6.3f}" for k in ("space", "time", "weight", "state", "drive")))
     if cross is not None:
-        from doodle.app.effort_corpus import table
+        from doodle.app.effort_corpus import held_out_title, table
 
         print("\n".join(table(cross)))
         rel = cross["reliability"]
         print(f"  calibration (cross-procedure runs): expected calibration error Time {rel['time']['ece']:.3f}, "
               f"Weight {rel['weight']['ece']:.3f}")
+        if held is not None:
+            print("\n".join(table(held, held_out_title(held))))
         if report["styled_proxy"]["clips"]:
             from doodle.app.effort_corpus import proxy_table
 
@@ -215,7 +226,7 @@ def cmd_eval(args) -> int:
 def _cross(args) -> dict | None:
     """The cross-procedure evaluation, compact for report.json (per-curve probabilities
     folded into State confusion matrices and the reliability table), or None when skipped."""
-    from doodle.app.effort_corpus import MOCAP, cross_procedure, reliability, state_confusion
+    from doodle.app.effort_corpus import MOCAP, cross_procedure, reliability
 
     if args.no_cross or (args.files and not args.mocap):
         return None
@@ -227,12 +238,45 @@ def _cross(args) -> dict | None:
         return None
     rep = cross_procedure(folder, progress=lambda text: print(text, file=sys.stderr, flush=True))
     rep["reliability"] = reliability(rep)
+    return _compact(rep)
+
+
+def _compact(rep: dict) -> dict:
+    """A protocol's report for report.json: the per-curve probabilities folded into State
+    confusion matrices."""
+    from doodle.app.effort_corpus import state_confusion
+
     rep["state_confusion"] = state_confusion(rep)
     for run in rep["runs"]:
         for cell in run["cells"].values():
             for key in ("p_sudden", "p_strong", "truth_time", "truth_weight"):
                 cell.pop(key)
     return rep
+
+
+def _held_out_folder(args) -> Path | None:
+    """The clips ``--held-out`` names (checked: a folder with clips), else the DeepMimic
+    ones beside the default ``--mocap`` if present, else None."""
+    from doodle.app.effort_corpus import HELD_OUT
+
+    if args.held_out:
+        folder = Path(args.held_out)
+        if not folder.is_dir():
+            raise DoodleError(f"{folder}: no such folder (--held-out)")
+        if not any(folder.glob("*.bvh")):
+            raise DoodleError(f"{folder}: no motion capture clips (*.bvh) (--held-out)")
+        return folder
+    return None if args.mocap or not HELD_OUT.is_dir() else HELD_OUT
+
+
+def _held_out(args, folder: Path) -> dict:
+    """The protocol on held-out clips (:func:`doodle.app.effort_corpus.held_out`): models
+    trained on the generator and one procedure applied to every ``--mocap`` clip, tested on
+    both applied to the clips in ``folder``."""
+    from doodle.app.effort_corpus import MOCAP, held_out
+
+    print(f"held-out clips: training on every clip, testing on {folder}", file=sys.stderr, flush=True)
+    return _compact(held_out(Path(args.mocap) if args.mocap else MOCAP, folder))
 
 
 def _proxy(args, model) -> dict:
