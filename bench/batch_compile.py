@@ -26,7 +26,9 @@ of output written out before, not by the kernel during, the next run: the batch 
 followed the one-by-one run and paid for its writes), with Python's bytecode cache on as in
 an installed program (a private ``PYTHONPYCACHEPREFIX``, filled untimed first, as
 :mod:`bench.startup` does). OpenBLAS is pinned to one thread everywhere (``OPENBLAS_NUM_THREADS=1``, set for the child
-processes and Dask's workers), so that two workers do not fight over two cores. The
+processes and Dask's workers), so that two workers do not fight over two cores; beside the
+end-to-end figures, the batch as a user's shell starts it, with no thread count set (the
+batch's workers pin their BLAS themselves, :func:`doodle.app.batch.run_job`). The
 machine's load average is printed before and after: other work on it takes cores from
 both sides, and most from the parallel one. The batch's outputs are checked to be
 byte-identical to the one-by-one ones.
@@ -118,21 +120,25 @@ PRIME = ("import dask.distributed, doodle.app.cli.main, doodle.app.batch, bench.
 _BYTECODE: list[Path] = []  # the children's bytecode folder (PYTHONPYCACHEPREFIX), once made
 
 
-def _env() -> dict:
-    """The children's environment: OpenBLAS on one thread, this checkout importable, and
-    Python's bytecode cache on in a private folder (:func:`bench.startup.with_bytecode`)."""
+def _env(pinned: bool = True) -> dict:
+    """The children's environment: OpenBLAS on one thread (unless not ``pinned``: as a user's
+    shell has it, no thread count set), this checkout importable, and Python's bytecode cache
+    on in a private folder (:func:`bench.startup.with_bytecode`)."""
     from bench.startup import with_bytecode
 
     env = dict(os.environ, OPENBLAS_NUM_THREADS="1",
                PYTHONPATH=os.pathsep.join(filter(None, [str(ROOT), os.environ.get("PYTHONPATH")])))
+    if not pinned:
+        for name in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+            env.pop(name, None)
     return with_bytecode(env, _BYTECODE[0]) if _BYTECODE else env
 
 
-def _child(argv: list[str]) -> tuple[float, str]:
+def _child(argv: list[str], pinned: bool = True) -> tuple[float, str]:
     """Wall seconds of a child Python process running ``argv``, and what it printed."""
     os.sync()  # the previous run's output written out now, not by the kernel during this run
     start = time.perf_counter()
-    done = subprocess.run([sys.executable, *argv], cwd=ROOT, env=_env(), capture_output=True, text=True)
+    done = subprocess.run([sys.executable, *argv], cwd=ROOT, env=_env(pinned), capture_output=True, text=True)
     seconds = time.perf_counter() - start
     if done.returncode != 0:
         raise SystemExit(f"{' '.join(argv)} failed:\n{done.stdout[-2000:]}{done.stderr[-2000:]}")
@@ -165,16 +171,20 @@ def _load() -> str:
     return f"load average {', '.join(f'{x:.2f}' for x in os.getloadavg())}; free cores ≈ {2 * alone / both:.2f}"
 
 
-def end_to_end(takes: Path, out: Path, runs: int) -> tuple[list, list, list, bool]:
-    serial, batch, pool, same = [], [], [], True
+def end_to_end(takes: Path, out: Path, runs: int) -> tuple[list, list, list, list, bool]:
+    """Seconds per run of the files compiled one after another, as one batch, on the floor's
+    pool, and as one batch started without OPENBLAS_NUM_THREADS (as a user's shell starts it);
+    and whether the batch's outputs equal the one-by-one ones."""
+    serial, batch, pool, user, same = [], [], [], [], True
+    command = ["-m", "doodle.app.cli.main", "compile", str(takes), "-o", str(out), "--workers", str(WORKERS)]
     for _ in range(runs):
         serial.append(_child(["-m", "bench.batch_compile", "--one-by-one", str(takes), str(out)])[0])
         alone = _outputs(out)
-        batch.append(_child(["-m", "doodle.app.cli.main", "compile", str(takes), "-o", str(out),
-                             "--workers", str(WORKERS)])[0])
+        batch.append(_child(command)[0])
         same = same and _outputs(out) == alone  # into the same folders: report.json's paths alike
         pool.append(_child(["-m", "bench.batch_compile", "--pool", str(takes), str(out)])[0])
-    return serial, batch, pool, same
+        user.append(_child(command, pinned=False)[0])
+    return serial, batch, pool, user, same
 
 
 def steady_state(takes: Path, out: Path, runs: int) -> tuple[list, list]:
@@ -243,11 +253,13 @@ def main(argv: list[str] | None = None) -> int:
         print(f"Batch compile: {args.files} {what}, one after another in one process vs a {WORKERS}-worker local "
               f"Dask cluster (median of {args.runs}; {os.cpu_count()} CPUs, OPENBLAS_NUM_THREADS=1)")
         print(f"  before: {_load()}")
-        serial, batch, pool, same = end_to_end(takes, out, args.runs)
+        serial, batch, pool, user, same = end_to_end(takes, out, args.runs)
         warm_serial, warm_batch = steady_state(takes, out, args.runs)
     print(f"  after:  {_load()}")
     _line("end to end (fresh processes: start-up, imports, cluster start and stop included)", serial, batch,
           args.files, pool)
+    print(f"    the batch started without OPENBLAS_NUM_THREADS (a user's shell) {statistics.median(user):4.1f} s  "
+          f"({', '.join(f'{x:.1f}' for x in user)})")
     _line("steady state (everything loaded; a running cluster)", warm_serial, warm_batch, args.files)
     print(f"  batch outputs byte-identical to one-by-one: {'yes' if same else 'NO'}")
     return 0
