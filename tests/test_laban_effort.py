@@ -219,18 +219,23 @@ def test_held_out_clips_are_tested_on_both_procedures(tmp_path, monkeypatch):
 
 
 def test_laban_eval_refuses_held_out_clips_it_cannot_read(tmp_path, capsys):
-    """``doodle laban eval --held-out`` names the folder that is not one, or holds no clip,
-    before minutes of work, and exits 1 without a traceback."""
+    """``doodle laban eval --held-out`` names the folder that is not one, holds no clip or a
+    broken one, before minutes of work, and exits 1 without a traceback."""
     from doodle.app.cli.main import main
 
     (tmp_path / "empty").mkdir()
     (tmp_path / "file.bvh").write_text("HIERARCHY\n")
-    for where, says in (("empty", "no motion capture clips (*.bvh) (--held-out)"),
-                        ("file.bvh", "no such folder (--held-out)"), ("missing", "no such folder (--held-out)")):
+    (tmp_path / "broken").mkdir()
+    (tmp_path / "broken" / "x.bvh").write_text("HIERARCHY\n")
+    for where, says in (("empty", "empty: no motion capture clips (*.bvh) (--held-out)"),
+                        ("broken", "broken/x.bvh:1: missing ROOT after HIERARCHY"),
+                        ("file.bvh", "file.bvh: no such folder (--held-out)"),
+                        ("missing", "missing: no such folder (--held-out)")):
         assert main(["laban", "eval", "--people", "1", "--held-out", str(tmp_path / where),
                      "-o", str(tmp_path / "ev")]) == 1
         err = capsys.readouterr().err
-        assert f"{tmp_path / where}: {says}" in err and "Traceback" not in err
+        assert f"{tmp_path}/{says}" in err and "Traceback" not in err
+
 
 def _rest_stroke(duration, shape="minjerk", rate=90.0, pause=0.5):
     """Rest, one stroke of ``duration`` s whose speed is a minimum-jerk bell, a peaked

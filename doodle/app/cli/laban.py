@@ -46,8 +46,8 @@ def add_arguments(p) -> None:
                         "the Bandai clips beside the project, if present)")
     q.add_argument("--held-out", metavar="DIR",
                    help="clips of other people (any *.bvh) for the protocol on movement nothing was chosen on: "
-                        "trained on every --mocap clip, tested on these (default, with the default --mocap: the "
-                        "DeepMimic clips beside the Bandai ones, if present)")
+                        "trained on every --mocap clip, tested on these, after the cross-procedure tables (default, "
+                        "with the default --mocap: the DeepMimic clips beside the Bandai ones, if present)")
     q.add_argument("--no-cross", action="store_true", help="skip the cross-procedure tables (they take minutes)")
     q.add_argument("--json", action="store_true", help="print the report as JSON")
     q.set_defaults(run=cmd_eval)
@@ -257,7 +257,7 @@ def _compact(rep: dict) -> dict:
 def _held_out_folder(args) -> Path | None:
     """The clips ``--held-out`` names (checked: a folder with clips), else the DeepMimic
     ones beside the default ``--mocap`` if present, else None."""
-    from doodle.app.effort_corpus import HELD_OUT
+    from doodle.app.effort_corpus import HELD_OUT, neutral_clips
 
     if args.held_out:
         folder = Path(args.held_out)
@@ -265,6 +265,8 @@ def _held_out_folder(args) -> Path | None:
             raise DoodleError(f"{folder}: no such folder (--held-out)")
         if not any(folder.glob("*.bvh")):
             raise DoodleError(f"{folder}: no motion capture clips (*.bvh) (--held-out)")
+        if not neutral_clips(folder, "*.bvh"):  # every clip read now: a broken one named before the long part
+            raise DoodleError(f"{folder}: no clip moves a hand or the pelvis enough to carry effort (--held-out)")
         return folder
     return None if args.mocap or not HELD_OUT.is_dir() else HELD_OUT
 
