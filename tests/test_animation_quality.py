@@ -247,6 +247,26 @@ def test_a_cross_fade_between_far_apart_poses_does_not_whip(actions, seed):
     assert list(blend_lengths([0.0, 0.3, 1.0, 9.0])) == pytest.approx([BLEND, BLEND, 0.43, BLEND_MOST], abs=0.01)
 
 
+def test_a_cross_fade_into_a_stand_does_not_jerk_the_body_up():
+    """A quick performer's Duck (tempo × 0.6, read Sudden Strong): its getting up trimmed
+    for want of time, it rose on its own at 2.2 m/s as the cross-fade into the stand after it
+    began, and the two together lifted the pelvis at 2.6 m/s with both feet on the floor (a
+    pop). The fade now lasts as long as keeps the pelvis under the rise limit, the clips' own
+    motion included (0.36 -> 0.51 s here)."""
+    from doodle.synth.performers import perform, style_grid
+    from retarget.qa import Limits
+    from retarget.sequence import RISE_MARGIN
+    from retarget.skeleton import forward_kinematics
+
+    quick = next(s for s in style_grid() if s.label() == "tempo×0.6")
+    doodle, _ = perform(("Idle", "Walk", "Duck", "Side Walk Left", "Idle"), quick, seed=35)
+    results, checks = _checked(doodle, effort_model=_effort())
+    assert checks["c0"].passes and not checks["c0"].pops, checks["c0"].summary()
+    motion = results[0].motion
+    pelvis = forward_kinematics(motion)[0][:, results[0].roles["pelvis"], 1]
+    assert np.diff(pelvis).max() / motion.frame_time < RISE_MARGIN * Limits().rise
+
+
 def test_a_jump_travels_in_a_straight_line_at_an_even_speed_in_the_air():
     from retarget.trajectory import Span, world_path
 

@@ -329,7 +329,8 @@ def sequenced(track, segments, choices, times, skeleton, rest, scale, terrain, o
               retime, style, pin) -> "Sequenced":
     """One track's chosen clips laid on its path and sequenced on the timeline, with what
     :func:`finish` needs (the clips' contacts where ``pin``)."""
-    from retarget.sequence import (Placed, blend_lengths, boundary_gaps, contact_states, entry_phase, paced, sequence,
+    from retarget.sequence import (Placed, blend_lengths, boundary_gaps, contact_states, entry_phase, paced,
+                                   rising_blends, sequence,
                                    stride_scale)
     from retarget.timing import flight_times, in_flight, make_room, speed_limit
     from retarget.trajectory import world_path
@@ -379,7 +380,8 @@ def sequenced(track, segments, choices, times, skeleton, rest, scale, terrain, o
                                     at if before.cycles == 0 else 0.0, pc.motion, pc.pelvis, feet)
             # longer strides, faster steps
             pieces[k] = replace(pc, times=window, progress=progress / stride, phase=phase)
-    blends = blend_lengths(boundary_gaps(pieces, times, frame_path[:, [0, 2]], frame_heading, skeleton))
+    gaps, rises = boundary_gaps(pieces, times, frame_path[:, [0, 2]], frame_heading, skeleton)
+    blends = rising_blends(pieces, times, frame_path[:, [0, 2]], frame_heading, blend_lengths(gaps), rises)
     motion, transitions = sequence(pieces, times, frame_path[:, [0, 2]], frame_heading, skeleton, fps, blends,
                                    ground_y=frame_path[:, 1])
     used = {seg.action: (c.clip.path if c.on_skeleton else None) for seg, c in zip(segments, choices)}
