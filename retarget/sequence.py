@@ -409,15 +409,16 @@ def boundary_gaps(placed: list[Placed], times: np.ndarray, path_xz: np.ndarray, 
     return np.linalg.norm(points[1::2] - points[0::2], axis=2).max(axis=1), np.maximum(pelvis[1::2] - pelvis[0::2], 0.0)
 
 
-def _pelvis_height(placed: Placed, t: np.ndarray, path_xz: np.ndarray, heading: np.ndarray) -> np.ndarray:
-    """The pelvis's height (m, on flat ground) of the clip placed on the path at times ``t``."""
-    trans, _ = pose_at(placed, t, path_xz, heading)
-    p = placed.pelvis
-    return trans[:, p, 1] + (trans[:, 0, 1] if placed.motion.skeleton.parents[p] >= 0 else 0.0)
+def _pelvis_height(placed: Placed, t: np.ndarray) -> np.ndarray:
+    """The pelvis's height (m, on flat ground) of the placed clip at times ``t``, as
+    :func:`pose_at` puts it (its own height; helper joints above it zeroed), interpolated
+    alone rather than with the whole pose."""
+    m = placed.motion
+    f = np.clip(clip_time(placed, t) / m.frame_time, 0, m.frames - 1)
+    return np.interp(f, np.arange(m.frames), m.translations[:, placed.pelvis, 1])
 
 
-def rising_blends(placed: list[Placed], times: np.ndarray, path_xz: np.ndarray, heading: np.ndarray,
-                  blends: np.ndarray, rises: np.ndarray) -> np.ndarray:
+def rising_blends(placed: list[Placed], times: np.ndarray, blends: np.ndarray, rises: np.ndarray) -> np.ndarray:
     """The cross-fades' lengths ``blends`` (:func:`blend_lengths`), lengthened up to
     :data:`BLEND_MOST` where a fade into a pose with the pelvis higher (``rises``,
     :func:`boundary_gaps`) would lift it, the two clips' own motion added, faster than :data:`RISE_MARGIN` × the animation check's limit (or than
@@ -433,7 +434,7 @@ def rising_blends(placed: list[Placed], times: np.ndarray, path_xz: np.ndarray, 
         if len(idx) < 3:
             continue
         tt = times[idx]
-        ha, hb = (_pelvis_height(placed[j], tt, path_xz[idx], heading[idx]) for j in (k, k + 1))
+        ha, hb = (_pelvis_height(placed[j], tt) for j in (k, k + 1))
         dt = np.diff(tt)
         allowed = max(limit, float((np.diff(ha) / dt).max()), float((np.diff(hb) / dt).max()))
         best = (np.inf, out[k])

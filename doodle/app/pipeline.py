@@ -381,7 +381,7 @@ def sequenced(track, segments, choices, times, skeleton, rest, scale, terrain, o
             # longer strides, faster steps
             pieces[k] = replace(pc, times=window, progress=progress / stride, phase=phase)
     gaps, rises = boundary_gaps(pieces, times, frame_path[:, [0, 2]], frame_heading, skeleton)
-    blends = rising_blends(pieces, times, frame_path[:, [0, 2]], frame_heading, blend_lengths(gaps), rises)
+    blends = rising_blends(pieces, times, blend_lengths(gaps), rises)
     motion, transitions = sequence(pieces, times, frame_path[:, [0, 2]], frame_heading, skeleton, fps, blends,
                                    ground_y=frame_path[:, 1])
     used = {seg.action: (c.clip.path if c.on_skeleton else None) for seg, c in zip(segments, choices)}
