@@ -406,7 +406,8 @@ def boundary_gaps(placed: list[Placed], times: np.ndarray, path_xz: np.ndarray, 
         trans[rows], rots[rows] = pose_at(pl, at[ends], xz[ends], h[ends])
     points = body_points(Motion(skeleton, trans, rots, 1.0))  # one pass for all
     pelvis = points[:, pelvis_of(skeleton), 1]
-    return np.linalg.norm(points[1::2] - points[0::2], axis=2).max(axis=1), np.maximum(pelvis[1::2] - pelvis[0::2], 0.0)
+    gaps = np.linalg.norm(points[1::2] - points[0::2], axis=2).max(axis=1)
+    return gaps, np.maximum(pelvis[1::2] - pelvis[0::2], 0.0)
 
 
 def _pelvis_height(placed: Placed, t: np.ndarray) -> np.ndarray:
@@ -421,16 +422,18 @@ def _pelvis_height(placed: Placed, t: np.ndarray) -> np.ndarray:
 def rising_blends(placed: list[Placed], times: np.ndarray, blends: np.ndarray, rises: np.ndarray) -> np.ndarray:
     """The cross-fades' lengths ``blends`` (:func:`blend_lengths`), lengthened up to
     :data:`BLEND_MOST` where a fade into a pose with the pelvis higher (``rises``,
-    :func:`boundary_gaps`) would lift it, the two clips' own motion added, faster than :data:`RISE_MARGIN` × the animation check's limit (or than
-    either clip lifts it itself; where no length does, the one that comes nearest): a quick
-    Duck whose getting up was trimmed rose on its own at 2.2 m/s as the 0.36 s fade into a
-    stand began, and the two together jerked the body up at 2.6 m/s with its feet on the
-    floor. Evaluated on the output frames around the hand-over."""
+    :func:`boundary_gaps`) would lift it, the two clips' own motion added, faster than
+    :data:`RISE_MARGIN` × the animation check's limit (or than either clip lifts it itself;
+    where no length does, the one that comes nearest): a quick Duck whose getting up was
+    trimmed rose on its own at 2.2 m/s as the 0.36 s fade into a stand began, and the two
+    together jerked the body up at 2.6 m/s with its feet on the floor. Evaluated on the
+    output frames around the hand-over, one transition at a time."""
     out = np.array(blends, dtype=float)
     limit = RISE_MARGIN * Limits().rise
     for k in np.flatnonzero(np.asarray(rises) > 0.0):
         at = placed[k + 1].span.t0
-        idx = np.arange(np.searchsorted(times, at - BLEND_MOST / 2), np.searchsorted(times, at + BLEND_MOST / 2, "right"))
+        idx = np.arange(np.searchsorted(times, at - BLEND_MOST / 2),
+                        np.searchsorted(times, at + BLEND_MOST / 2, "right"))
         if len(idx) < 3:
             continue
         tt = times[idx]

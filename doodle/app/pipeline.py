@@ -330,8 +330,7 @@ def sequenced(track, segments, choices, times, skeleton, rest, scale, terrain, o
     """One track's chosen clips laid on its path and sequenced on the timeline, with what
     :func:`finish` needs (the clips' contacts where ``pin``)."""
     from retarget.sequence import (Placed, blend_lengths, boundary_gaps, contact_states, entry_phase, paced,
-                                   rising_blends, sequence,
-                                   stride_scale)
+                                   rising_blends, sequence, stride_scale)
     from retarget.timing import flight_times, in_flight, make_room, speed_limit
     from retarget.trajectory import world_path
 
