@@ -9,7 +9,7 @@ a warm library cache and Python's bytecode written (one untimed compile of the d
 both) and BLAS pinned to one thread. For each: the wall-clock time (median of ``--runs``
 processes for the 60 s doodle, one process for the longer ones unless ``--runs-long`` says
 otherwise), the time per second of doodle and its ratio to the 60 s doodle's, and the peak
-resident memory of the child (``os.wait4``'s ``ru_maxrss``; the largest of its runs).
+resident memory of the child (its own VmHWM, :data:`PEAK`; the largest of its runs).
 
 Beside them, a floor: a fresh ``python -c "import numpy"`` plus, in this process, writing
 the compiled BVH's motion block (the same frames and channels) as text with ``np.savetxt``
@@ -100,19 +100,44 @@ def _env(cache: Path, bytecode: Path) -> dict:
     return env
 
 
+# Run a module as ``python -m`` does, then write the process's own peak resident memory to
+# stderr as it exits. Linux's ru_maxrss of a child (os.wait4) is at least the parent's resident
+# size when it forked — exec keeps that high-water mark —, so a child of a large process (this
+# bench inside ``python -m bench``, grown to 2 GB by the benchmarks before it) read 2 GB for a
+# 60 s doodle; /proc/self/status's VmHWM is the exec'd program's own.
+PEAK = """import atexit, runpy, sys
+def _peak():
+    try:
+        with open("/proc/self/status") as f:
+            kb = next(int(line.split()[1]) for line in f if line.startswith("VmHWM:"))
+        sys.stderr.write(f"\\nPEAK_KB {kb}\\n")
+    except (OSError, StopIteration, ValueError):
+        pass
+atexit.register(_peak)
+sys.argv = sys.argv[1:]
+runpy.run_module(sys.argv[0], run_name="__main__", alter_sys=True)
+"""
+
+
 def run_child(argv: list[str], env: dict) -> tuple[float, float]:
-    """Wall seconds and peak RSS (MB) of one fresh process running ``argv``."""
+    """Wall seconds and peak RSS (MB) of one fresh process running ``argv`` — a
+    ``[python, "-m", MODULE, ...]`` one reports its own peak (:data:`PEAK`); any other, or
+    where /proc is missing, the ``ru_maxrss`` of ``os.wait4``."""
+    if argv[1:2] == ["-m"]:
+        argv = [argv[0], "-c", PEAK, *argv[2:]]
     start = time.perf_counter()
     with tempfile.TemporaryFile() as err:
         child = subprocess.Popen(argv, env=env, cwd=ROOT, stdout=subprocess.DEVNULL, stderr=err)
         _, status, usage = os.wait4(child.pid, 0)
         wall = time.perf_counter() - start
         child.returncode = os.waitstatus_to_exitcode(status)
+        err.seek(0)
+        lines = err.read().decode(errors="replace").strip().splitlines()
+        peak = [int(line.split()[1]) for line in lines if line.startswith("PEAK_KB ")]
         if child.returncode != 0:
-            err.seek(0)
-            lines = err.read().decode(errors="replace").strip().splitlines() or [""]
-            raise RuntimeError(f"exit status {child.returncode}: {lines[-1][-300:]}")
-    return wall, usage.ru_maxrss / 1024.0  # KB on Linux
+            said = [line for line in lines if line.strip() and not line.startswith("PEAK_KB ")] or [""]
+            raise RuntimeError(f"exit status {child.returncode}: {said[-1][-300:]}")
+    return wall, (peak[-1] if peak else usage.ru_maxrss) / 1024.0  # KB on Linux
 
 
 def _motion_shape(bvh: Path) -> tuple[int, int]:
