@@ -143,7 +143,11 @@ def planted(motion: Motion, feet: list[int], positions: np.ndarray | None = None
     return (above - above.min(axis=0) <= height) & (speed <= CONTACT_SPEED)
 
 
-REACH = 0.35  # m: a pinned foot left farther behind than this by the body takes a new spot
+REACH = 0.35  # m: a pinned foot left farther behind than this by the body takes a new spot ...
+OVERREACH = 0.01  # m: ... or one its hip is this much farther from than the leg is long ...
+FLAT_RISE = 0.01  # m: ... while the clips keep its ankle within this of its height at landing ...
+STRETCHED = 0.2  # s: ... for this long (a step's toe-off stretches the leg for a moment)
+STEP_LEAST = 0.05  # m: a foot moved less than this to a new spot is not given a step
 LOWEST = 0.2  # m: the most the pelvis is lowered for a foot on lower ground (a deep knee bend)
 
 
@@ -193,9 +197,14 @@ def pin_feet(motion: Motion, feet: list[int], fade: int = 3, terrain=None, conta
     in_air = _aloft(original, feet, contacts, terrain, standing)  # the body, not only the feet
     targets, weights, helds = [], [], []
     for k, ankle in enumerate(feet):
+        knee = int(motion.skeleton.parents[ankle])
+        hip = int(motion.skeleton.parents[knee]) if knee >= 0 else -1
+        leg = np.inf if hip < 0 else float(np.linalg.norm(original[:, knee][0] - original[:, hip][0])
+                                           + np.linalg.norm(original[:, ankle][0] - original[:, knee][0]))
         target, weight, held = _pins(original[:, ankle], contacts[:, k], fade, terrain,
                                      None if standing is None else standing[k], None if rise is None else rise[k],
-                                     motion.fps, aloft=in_air, clear=clears[k])
+                                     motion.fps, aloft=in_air, clear=clears[k],
+                                     hip=original[:, hip] if hip >= 0 else None, leg=leg)
         targets.append(target)
         weights.append(weight)
         helds.append(held)
@@ -312,10 +321,16 @@ STEP_APEX = (0.04, 0.10)  # m: the apex of a given step, half its length, within
 
 def _pins(ankle: np.ndarray, contact: np.ndarray, fade: int, terrain, standing: float | None,
           rise: np.ndarray | None = None, fps: float = 30.0, aloft: np.ndarray | None = None,
-          clear: np.ndarray | None = None):
+          clear: np.ndarray | None = None, hip: np.ndarray | None = None, leg: float = np.inf):
     """One foot's targets (F, 3), weights (F,) and standing weights (F,): held at its landing
     spot over each contact interval (a new spot once the body has left it more than
-    :data:`REACH` behind); between two spots, a foot that the blended clips shuffle along
+    :data:`REACH` behind, or once its ``hip`` (F, 3) stays farther from it than the ``leg``
+    reaches — by :data:`OVERREACH`, for :data:`STRETCHED`, while the clips keep the foot flat,
+    and the clips' foot :data:`STEP_LEAST` or more away: a large performer came to a stand
+    out of a walk with a foot 31 cm behind where the stand puts it, held there, and the Kick
+    after it rose onto its hop with that foot out of reach, hanging 4–6 cm above the floor
+    for half a second; a walk's toe-off stretches the leg only for a moment); between two
+    spots, a foot that the blended clips shuffle along
     the floor (lifted less than :data:`STEP_LIFT`) or fling there (faster than
     :data:`STEP_SPEED`) steps instead — lifted in an arc, over at least the time a step of
     that length takes (borrowed from the stances either side) — unless the body is in the air
@@ -341,6 +356,16 @@ def _pins(ankle: np.ndarray, contact: np.ndarray, fade: int, terrain, standing: 
         while s < e:
             spot = ankle[s, [0, 2]]
             away = np.linalg.norm(ankle[s:e, [0, 2]] - spot, axis=1) > REACH
+            if hip is not None:  # held out of the leg's reach, the clips' foot flat, for a while
+                out = (ankle[s:e, 1] <= ankle[s, 1] + FLAT_RISE) & \
+                      (np.linalg.norm(hip[s:e] - ankle[s], axis=1) > leg + OVERREACH)
+                n = max(int(round(STRETCHED * fps)), 1)
+                held_out = np.zeros(len(out), dtype=bool)  # out of reach for the last n frames
+                for a, b in _intervals(out):
+                    held_out[a + n - 1:b] = True
+                # ... where the clips' foot is far enough to step to (nearer, it would slide)
+                held_out &= np.linalg.norm(ankle[s:e, [0, 2]] - spot, axis=1) >= STEP_LEAST
+                away |= np.maximum.accumulate(held_out)
             stop = max(s + int(np.argmax(away)) if away.any() else e, s + 1)
             low = float(height[s:stop].min())
             base = low if standing is None else standing
@@ -354,7 +379,7 @@ def _pins(ankle: np.ndarray, contact: np.ndarray, fade: int, terrain, standing: 
         lifted = float((height[lo:hi] - a[2][1]).max()) if hi > lo else 0.0
         need = int(np.ceil(length / STEP_SPEED * fps)) + 1
         flying = aloft is not None and bool(aloft[lo:hi].any())
-        if length < 0.05 or flying or (lifted >= STEP_LIFT and hi - lo >= need):
+        if length < STEP_LEAST or flying or (lifted >= STEP_LIFT and hi - lo >= need):
             continue
         while hi - lo < need and (a[1] - a[0] > 1 or b[1] - b[0] > 1):
             if a[1] - a[0] > 1 and (hi - lo) % 2 == 0:

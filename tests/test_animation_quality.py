@@ -267,6 +267,42 @@ def test_a_cross_fade_into_a_stand_does_not_jerk_the_body_up():
     assert np.diff(pelvis).max() / motion.frame_time < RISE_MARGIN * Limits().rise
 
 
+def test_a_pinned_foot_the_hip_stays_out_of_reach_of_takes_a_new_spot():
+    """A foot the contacts hold where it landed while the body settles 25 cm away, short of
+    the 35 cm that re-plants a foot: once the hip has been out of the leg's reach for a while
+    (the foot flat), the foot steps to where the clips put it; a moment's stretch (a step's
+    toe-off) or a new spot too near to step to does not move it."""
+    from retarget.feet import STRETCHED, _pins
+
+    fps, leg = 30.0, 0.83
+    t = np.arange(40) / fps
+    x = np.clip(t / 0.5, 0.0, 1.0) * 0.25  # the body (and the clips' foot) moves 25 cm, then stands
+    ankle = np.column_stack([x, np.full(len(t), 0.08), np.zeros(len(t))])
+    hip = np.column_stack([x + 0.25, np.full(len(t), 0.9), np.zeros(len(t))])  # the hip ahead of the foot
+    contact = np.ones(len(t), dtype=bool)
+    target, _, _ = _pins(ankle, contact, 3, None, 0.08, fps=fps, hip=hip, leg=leg)
+    assert target[0, 0] == pytest.approx(0.0) and target[-1, 0] > 0.05  # stepped forward
+    target, _, _ = _pins(ankle, contact, 3, None, 0.08, fps=fps)  # no hip: held where it landed
+    assert np.allclose(target[:, 0], 0.0)
+    brief = np.column_stack([np.full(len(t), 0.1), np.full(len(t), 0.9), np.zeros(len(t))])  # within reach ...
+    brief[10:10 + int(STRETCHED * fps) - 1, 0] = 0.5  # ... but for a moment shorter than STRETCHED
+    target, _, _ = _pins(ankle, contact, 3, None, 0.08, fps=fps, hip=brief, leg=leg)
+    assert np.allclose(target[:, 0], 0.0)
+
+
+def test_a_large_performers_kick_does_not_hang_its_standing_foot():
+    """A large performer (size × 1.4): coming to a stand out of the walk, the left foot was
+    held 31 cm behind where the stand puts it, and the Kick after it (read Sudden) rose onto
+    its hop with that foot out of the leg's reach, 4–6 cm above the floor for half a second
+    (the check's foot held in the air). It now steps under the body as the walk ends."""
+    from doodle.synth.performers import perform, style_grid
+
+    large = next(s for s in style_grid() if s.label() == "size×1.4")
+    doodle, _ = perform(("Idle", "Walk", "Kick", "Side Walk Left", "Idle"), large, seed=35)
+    _, checks = _checked(doodle, effort_model=_effort())
+    assert checks["c0"].passes and not checks["c0"].hovering, checks["c0"].summary()
+
+
 def test_a_jump_travels_in_a_straight_line_at_an_even_speed_in_the_air():
     from retarget.trajectory import Span, world_path
 
