@@ -330,11 +330,10 @@ def _pins(ankle: np.ndarray, contact: np.ndarray, fade: int, terrain, standing: 
     out of a walk with a foot 31 cm behind where the stand puts it, held there, and the Kick
     after it rose onto its hop with that foot out of reach, hanging 4–6 cm above the floor
     for half a second; a walk's toe-off stretches the leg only for a moment); between two
-    spots, a foot that the blended clips shuffle along
-    the floor (lifted less than :data:`STEP_LIFT`) or fling there (faster than
-    :data:`STEP_SPEED`) steps instead — lifted in an arc, over at least the time a step of
-    that length takes (borrowed from the stances either side) — unless the body is in the air
-    in between (``aloft``, :func:`_aloft`: a jump's or a run's flight), where the foot goes
+    spots, a foot that the blended clips shuffle along the floor (lifted less than
+    :data:`STEP_LIFT`) or fling there (faster than :data:`STEP_SPEED`) steps instead —
+    lifted in an arc, over at least the time a step of that length takes (borrowed from the
+    stances either side) — unless the body is in the air in between (``aloft``, :func:`_aloft`: a jump's or a run's flight), where the foot goes
     with the body (a back flip travelling 3 m had its feet dragged along a step's low arc
     under it, the legs bent down out of the flip and snapping back at 17 m/s);
     on uneven ground (``rise``: the ground under the foot above the ground under the root)
