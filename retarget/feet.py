@@ -329,7 +329,9 @@ def _pins(ankle: np.ndarray, contact: np.ndarray, fade: int, terrain, standing: 
     and the clips' foot :data:`STEP_LEAST` or more away: a large performer came to a stand
     out of a walk with a foot 31 cm behind where the stand puts it, held there, and the Kick
     after it rose onto its hop with that foot out of reach, hanging 4–6 cm above the floor
-    for half a second; a walk's toe-off stretches the leg only for a moment); between two
+    for half a second; a walk's toe-off stretches the leg only for a moment) — a spot within
+    :data:`STEP_LEAST` of the one before is that one (the same footprint: not a slide of a few
+    cm in one frame); between two
     spots, a foot that the blended clips shuffle along the floor (lifted less than
     :data:`STEP_LIFT`) or fling there (faster than :data:`STEP_SPEED`) steps instead —
     lifted in an arc, over at least the time a step of that length takes (borrowed from the
@@ -366,6 +368,8 @@ def _pins(ankle: np.ndarray, contact: np.ndarray, fade: int, terrain, standing: 
                 held_out &= np.linalg.norm(ankle[s:e, [0, 2]] - spot, axis=1) >= STEP_LEAST
                 away |= np.maximum.accumulate(held_out)
             stop = max(s + int(np.argmax(away)) if away.any() else e, s + 1)
+            if pins and np.linalg.norm(pins[-1][2][[0, 2]] - spot) < STEP_LEAST:
+                spot = pins[-1][2][[0, 2]]  # (nearly) where it stood before: the same footprint, not a slide
             low = float(height[s:stop].min())
             base = low if standing is None else standing
             on = np.array([spot[0], _ground(terrain, spot[None])[0] + base, spot[1]])

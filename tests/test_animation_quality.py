@@ -290,6 +290,20 @@ def test_a_pinned_foot_the_hip_stays_out_of_reach_of_takes_a_new_spot():
     assert np.allclose(target[:, 0], 0.0)
 
 
+def test_a_foot_landing_where_it_stood_keeps_its_footprint():
+    """Two contacts of one foot a frame apart (the cross-fades' votes flickering) whose clips
+    put it 3-4 cm apart: the same footprint, not a new spot 3-4 cm off that the foot slid to in
+    one frame (a Kick's standing foot, 4.6 cm in 1/30 s: the check's sliding)."""
+    from retarget.feet import _pins
+
+    frames = 20
+    ankle = np.column_stack([np.where(np.arange(frames) < 10, 0.0, 0.035), np.full(frames, 0.08), np.zeros(frames)])
+    contact = np.ones(frames, dtype=bool)
+    contact[9] = False
+    target, weight, _ = _pins(ankle, contact, 3, None, 0.08)
+    assert np.allclose(target[weight > 0, 0], 0.0)
+
+
 def test_a_large_performers_kick_does_not_hang_its_standing_foot():
     """A large performer (size × 1.4): coming to a stand out of the walk, the left foot was
     held 31 cm behind where the stand puts it, and the Kick after it (read Sudden) rose onto
