@@ -127,6 +127,16 @@ def _intervals(mask: np.ndarray) -> list[tuple[int, int]]:
     return list(zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)))
 
 
+def leg_of(skeleton, ankle: int) -> tuple[int, int, float]:
+    """The hip and knee above ``ankle`` (-1 where the chain is shorter) and the straight leg's
+    length, hip to ankle (m, from the rest offsets)."""
+    knee = int(skeleton.parents[ankle])
+    hip = int(skeleton.parents[knee]) if knee >= 0 else -1
+    if hip < 0:
+        return hip, knee, np.inf
+    return hip, knee, float(np.linalg.norm(skeleton.offsets[knee]) + np.linalg.norm(skeleton.offsets[ankle]))
+
+
 CONTACT_SPEED = 1.0  # m/s: a planted foot, even sliding, moves slower than a stepping one
 
 
@@ -197,10 +207,7 @@ def pin_feet(motion: Motion, feet: list[int], fade: int = 3, terrain=None, conta
     in_air = _aloft(original, feet, contacts, terrain, standing)  # the body, not only the feet
     targets, weights, helds = [], [], []
     for k, ankle in enumerate(feet):
-        knee = int(motion.skeleton.parents[ankle])
-        hip = int(motion.skeleton.parents[knee]) if knee >= 0 else -1
-        leg = np.inf if hip < 0 else float(np.linalg.norm(original[:, knee][0] - original[:, hip][0])
-                                           + np.linalg.norm(original[:, ankle][0] - original[:, knee][0]))
+        hip, _, leg = leg_of(motion.skeleton, ankle)
         target, weight, held = _pins(original[:, ankle], contacts[:, k], fade, terrain,
                                      None if standing is None else standing[k], None if rise is None else rise[k],
                                      motion.fps, aloft=in_air, clear=clears[k],
@@ -213,8 +220,7 @@ def pin_feet(motion: Motion, feet: list[int], fade: int = 3, terrain=None, conta
     front = _front(motion, world[0], feet)
     rots = None  # the legs share one copy of the rotations (each changes only its own joints)
     for k, ankle in enumerate(feet):
-        knee = int(motion.skeleton.parents[ankle])
-        hip = int(motion.skeleton.parents[knee]) if knee >= 0 else -1
+        hip, knee, _ = leg_of(motion.skeleton, ankle)
         if hip < 0 or not weights[k].any():
             continue
         rots = (motion.rotations if in_place else motion.rotations.copy()) if rots is None else rots
@@ -230,8 +236,7 @@ def pin_feet(motion: Motion, feet: list[int], fade: int = 3, terrain=None, conta
     rots = rots if rots is not None and rots is motion.rotations else None
     rots = motion.rotations if in_place and rots is None else rots
     for k, ankle in enumerate(feet):  # a standing foot's lowest point (heel, toes) on the ground
-        knee = int(motion.skeleton.parents[ankle])
-        hip = int(motion.skeleton.parents[knee]) if knee >= 0 else -1
+        hip, knee, _ = leg_of(motion.skeleton, ankle)
         if hip < 0 or not helds[k].any():
             continue
         gap = _clearance(motion, world, ankle, terrain) - sole
@@ -331,14 +336,13 @@ def _pins(ankle: np.ndarray, contact: np.ndarray, fade: int, terrain, standing: 
     after it rose onto its hop with that foot out of reach, hanging 4–6 cm above the floor
     for half a second; a walk's toe-off stretches the leg only for a moment) — a spot within
     :data:`STEP_LEAST` of the one before is that one (the same footprint: not a slide of a few
-    cm in one frame); between two
-    spots, a foot that the blended clips shuffle along the floor (lifted less than
-    :data:`STEP_LIFT`) or fling there (faster than :data:`STEP_SPEED`) steps instead —
-    lifted in an arc, over at least the time a step of that length takes (borrowed from the
-    stances either side) — unless the body is in the air in between (``aloft``, :func:`_aloft`: a jump's or a run's flight), where the foot goes
-    with the body (a back flip travelling 3 m had its feet dragged along a step's low arc
-    under it, the legs bent down out of the flip and snapping back at 17 m/s);
-    on uneven ground (``rise``: the ground under the foot above the ground under the root)
+    cm in one frame); between two spots, a foot that the blended clips shuffle along the floor
+    (lifted less than :data:`STEP_LIFT`) or fling there (faster than :data:`STEP_SPEED`) steps
+    instead — lifted in an arc, over at least the time a step of that length takes (borrowed
+    from the stances either side) — unless the body is in the air in between (``aloft``,
+    :func:`_aloft`: a jump's or a run's flight), where the foot goes with the body (a back
+    flip travelling 3 m had its feet dragged along a step's low arc under it, the legs bent
+    down out of the flip and snapping back at 17 m/s); on uneven ground (``rise``: the ground under the foot above the ground under the root)
     raised by the ground under it elsewhere. ``clear`` (per frame, how far the foot's lowest
     point is above the ground as the clips have it): an ankle the clips put lower than
     standing is raised no higher than puts that point on the floor (raised to the standing
@@ -460,11 +464,10 @@ def _lower_to_reach(motion: Motion, positions: np.ndarray, feet: list[int], targ
     reach (a foot on ground lower than the root's, a style that lifted the body)."""
     need = np.zeros(motion.frames)
     for ankle, target, weight in zip(feet, targets, weights):
-        knee = int(motion.skeleton.parents[ankle])
-        hip = int(motion.skeleton.parents[knee]) if knee >= 0 else -1
+        hip, knee, length = leg_of(motion.skeleton, ankle)
         if hip < 0:
             continue
-        leg = 0.98 * (np.linalg.norm(motion.skeleton.offsets[knee]) + np.linalg.norm(motion.skeleton.offsets[ankle]))
+        leg = 0.98 * length
         goal = positions[:, ankle] + (target - positions[:, ankle]) * weight[:, None]
         across = np.linalg.norm((goal - positions[:, hip])[:, [0, 2]], axis=1)
         down = positions[:, hip, 1] - goal[:, 1]

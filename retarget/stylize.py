@@ -45,7 +45,7 @@ from doodle.core.quat import make_continuous
 from doodle.core.splines import PchipInterpolator
 from retarget.analysis import Stages, foot_contacts, guess_roles, partition, pelvis_of
 from retarget.effort_signature import FASTEST, RATE, burst, most_moving, speed_profile
-from retarget.feet import two_bone_ik
+from retarget.feet import leg_of, two_bone_ik
 from retarget.qa import Limits, check, foot_points, planted_moves
 from retarget.sequence import rise_least
 from retarget.skeleton import Motion, body_points, end_site_positions, forward_kinematics, per_motion
@@ -178,8 +178,7 @@ def _restore_contacts(before: Motion, after: Motion, world=None, clip_frames: np
     clip = np.arange(before.frames)
     flat, step = _own_planted_moves(before)
     for k, ankle in enumerate(feet):
-        knee = int(before.skeleton.parents[ankle])
-        hip = int(before.skeleton.parents[knee]) if knee >= 0 else -1
+        hip, knee, _ = leg_of(before.skeleton, ankle)
         planted = _own_contacts(before, ankle).copy()
         slid = np.zeros((before.frames - 1, 2))
         if flat.shape[1] == len(feet):
