@@ -191,7 +191,7 @@ def cmd_eval(args) -> int:
                 confusion_png(r[matrix], list(labels), staged(pictures[-1]), f"{method}: {title}")
         for prefix, title, rep in (("cross", "cross-procedure", cross), ("held_out", "held-out clips", held)):
             for group, matrix in (rep or {}).get("state_confusion", {}).items():
-                name = group.replace(" → ", "_to_").replace(" ", "_")
+                name = group.replace(" → ", "_to_").replace(" + ", "_and_").replace(" ", "_")
                 pictures.append(str(out / f"{prefix}_{name}_states.png"))
                 confusion_png(matrix, list(STATES), staged(pictures[-1]), f"{title} {group}: States")
         if cross is not None:
