@@ -32,10 +32,10 @@ def confusion_png(matrix, labels: list[str], path, title: str) -> Path:
     return _save(fig, path)
 
 
-def reliability_png(reliability: dict, path) -> Path:
+def reliability_png(reliability: dict, path, title: str | None = None) -> Path:
     """A reliability diagram: per confidence bin, the share of decisions that were right
     against the confidence they were given (the diagonal is perfect calibration), for Time
-    and Weight, with the bins' counts; written atomically."""
+    and Weight, with the bins' counts, under ``title``; written atomically."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -57,6 +57,8 @@ def reliability_png(reliability: dict, path) -> Path:
         ax.set_ylabel("share right")
         ax.set_title(f"{'Time' if factor == 'time' else 'Weight'}: ECE {r['ece']:.3f} ({r['n']} decisions)")
         ax.legend(loc="lower right", fontsize=8)
+    if title:
+        fig.suptitle(title, fontsize=9)
     return _save(fig, path)
 
 

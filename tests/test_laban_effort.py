@@ -217,6 +217,10 @@ def test_held_out_clips_are_tested_on_both_procedures(tmp_path, monkeypatch):
     for run in rep["runs"]:
         cell = run["cells"]["human @ 30 Hz"]
         assert 0 <= cell["state"] <= min(cell["time"], cell["weight"]) <= 1 and cell["n"] == run["test"] > 0
+    shipped = ec.shipped_groups(rep)
+    assert shipped == ("emote + stylize → emote", "emote + stylize → stylize")
+    rel = ec.reliability(rep, shipped)  # the shipped model's recipe alone
+    assert rel["weight"]["n"] == sum(r["test"] for r in rep["runs"] if r["group"] in shipped)
     title = ec.held_out_title(rep)
     assert "every clip of train" in title and "the 2 clips of test" in title and "other clips of test" in title
     assert ec.table(rep, title)[0].startswith(title)

@@ -38,6 +38,7 @@ REACH = 0.25  # m: a path that moves less than this (box diagonal, performer's s
 PATHS = ("right_hand", "left_hand", "pelvis")
 SCALES = {"figurine ×0.15": 0.15, "human ×1": 1.0}
 STATES = ((1, 1), (1, -1), (-1, 1), (-1, -1))  # (time, weight): Sudden Strong … Sustained Light
+SHIPPED = "emote + stylize"  # the held-out runs trained as the shipped model is (the generator and both procedures)
 THESIS = {"time": "> 0.85 (Drive HMM)", "weight": "NB single factors ≥ 0.74", "state": "0.63 (HMM States)"}
 
 
@@ -267,7 +268,7 @@ def held_out(root=None, test_root=None, seed: int = 0, variants: int = 2, thresh
               "tested_on": str(test_root or HELD_OUT), "threshold": threshold, "scales": dict(scales),
               "rates": list(rates), "runs": []}
     recipes = [(p, generator + trained[p]) for p in procedures]
-    recipes.append(("emote + stylize", generator + trained["emote"] + trained["stylize"]))
+    recipes.append((SHIPPED, generator + trained["emote"] + trained["stylize"]))
     for k, (name, items) in enumerate(recipes):
         factors = train_factors(items, seed=seed)
         for test_proc, test in tests.items():
@@ -360,10 +361,15 @@ def table(report: dict, title: str = "Cross-procedure Effort accuracy (trained o
     return lines
 
 
+def shipped_groups(report: dict) -> tuple[str, ...]:
+    """The groups of :func:`held_out`'s runs trained as the shipped model is."""
+    return tuple(run["group"] for run in report["runs"] if run["group"].startswith(f"{SHIPPED} → "))
+
+
 def reliability(report: dict, groups=None, bins: int = 10) -> dict:
     """Reliability of the decisions' confidences, pooled over the cross-procedure runs'
-    cells: per confidence bin, the mean confidence, the share right and the count, for
-    Time and Weight; and the expected calibration error."""
+    cells (or those of the runs in ``groups``): per confidence bin, the mean confidence, the
+    share right and the count, for Time and Weight; and the expected calibration error."""
     out = {}
     for factor, key, truth in (("time", "p_sudden", "truth_time"), ("weight", "p_strong", "truth_weight")):
         p, y = [], []

@@ -196,7 +196,12 @@ def cmd_eval(args) -> int:
                 confusion_png(matrix, list(STATES), staged(pictures[-1]), f"{title} {group}: States")
         if cross is not None:
             pictures.append(str(out / "reliability.png"))
-            reliability_png(cross["reliability"], staged(pictures[-1]))
+            reliability_png(cross["reliability"], staged(pictures[-1]),
+                            "cross-procedure runs (trained on one procedure, tested on the other)")
+        if held is not None:
+            pictures.append(str(out / "held_out_reliability.png"))
+            reliability_png(held["reliability"], staged(pictures[-1]),
+                            "trained as the shipped model (generator and both procedures), tested on the held-out clips")
         report["pictures"] = pictures
         atomic_write(staged(out / "report.json"), [json.dumps(report, indent=2) + "\n"])
     if args.json:
@@ -215,6 +220,9 @@ def cmd_eval(args) -> int:
               f"Weight {rel['weight']['ece']:.3f}")
         if held is not None:
             print("\n".join(table(held, held_out_title(held))))
+            rel = held["reliability"]
+            print(f"  calibration (trained as the shipped model, on the held-out clips): expected calibration error "
+                  f"Time {rel['time']['ece']:.3f}, Weight {rel['weight']['ece']:.3f}")
         if report["styled_proxy"]["clips"]:
             from doodle.app.effort_corpus import proxy_table
 
@@ -275,10 +283,12 @@ def _held_out(args, folder: Path) -> dict:
     """The protocol on held-out clips (:func:`doodle.app.effort_corpus.held_out`): models
     trained on the generator and one procedure applied to every ``--mocap`` clip, tested on
     both applied to the clips in ``folder``."""
-    from doodle.app.effort_corpus import MOCAP, held_out
+    from doodle.app.effort_corpus import MOCAP, held_out, reliability, shipped_groups
 
     print(f"held-out clips: training on every clip, testing on {folder}", file=sys.stderr, flush=True)
-    return _compact(held_out(Path(args.mocap) if args.mocap else MOCAP, folder))
+    rep = held_out(Path(args.mocap) if args.mocap else MOCAP, folder)
+    rep["reliability"] = reliability(rep, shipped_groups(rep))  # the shipped model's recipe, on clips it never saw
+    return _compact(rep)
 
 
 def _proxy(args, model) -> dict:
