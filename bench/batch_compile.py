@@ -15,7 +15,8 @@ see the same load, each beside the target ≥ 1.8× on 2 cores:
   worker's own first compile — imports, the library loaded — included) against the child
   compiling the files in turn (its start-up and first compile included once); beside them
   the floor no engine can beat, a fresh process compiling the files on 2 processes it forks
-  without Dask (:func:`pooled`);
+  without Dask (:func:`pooled`), and what the batch replaces for a user, one ``doodle
+  compile FILE`` process per file in turn (each paying its own start-up);
 * **steady state** — the same 16 compiles once everything is loaded: in turn, after one
   warm-up compile in that process, against a batch sent to a running 2-worker cluster
   whose workers have each compiled once (``--scheduler`` path), set up as a local one
@@ -171,11 +172,12 @@ def _load() -> str:
     return f"load average {', '.join(f'{x:.2f}' for x in os.getloadavg())}; free cores ≈ {2 * alone / both:.2f}"
 
 
-def end_to_end(takes: Path, out: Path, runs: int) -> tuple[list, list, list, list, bool]:
+def end_to_end(takes: Path, out: Path, runs: int) -> tuple[list, list, list, list, list, bool]:
     """Seconds per run of the files compiled one after another, as one batch, on the floor's
-    pool, and as one batch started without OPENBLAS_NUM_THREADS (as a user's shell starts it);
-    and whether the batch's outputs equal the one-by-one ones."""
-    serial, batch, pool, user, same = [], [], [], [], True
+    pool, as one batch started without OPENBLAS_NUM_THREADS (as a user's shell starts it), and
+    as one ``doodle compile FILE`` process per file in turn (a shell loop: what the batch
+    replaces for a user); and whether the batch's outputs equal the one-by-one ones."""
+    serial, batch, pool, user, loop, same = [], [], [], [], [], True
     command = ["-m", "doodle.app.cli.main", "compile", str(takes), "-o", str(out), "--workers", str(WORKERS)]
     for _ in range(runs):
         serial.append(_child(["-m", "bench.batch_compile", "--one-by-one", str(takes), str(out)])[0])
@@ -184,7 +186,9 @@ def end_to_end(takes: Path, out: Path, runs: int) -> tuple[list, list, list, lis
         same = same and _outputs(out) == alone  # into the same folders: report.json's paths alike
         pool.append(_child(["-m", "bench.batch_compile", "--pool", str(takes), str(out)])[0])
         user.append(_child(command, pinned=False)[0])
-    return serial, batch, pool, user, same
+        loop.append(sum(_child(["-m", "doodle.app.cli.main", "compile", str(f), "-o", str(out / f.stem)])[0]
+                        for f in sorted(takes.glob("*.doodle"))))
+    return serial, batch, pool, user, loop, same
 
 
 def steady_state(takes: Path, out: Path, runs: int) -> tuple[list, list]:
@@ -253,13 +257,16 @@ def main(argv: list[str] | None = None) -> int:
         print(f"Batch compile: {args.files} {what}, one after another in one process vs a {WORKERS}-worker local "
               f"Dask cluster (median of {args.runs}; {os.cpu_count()} CPUs, OPENBLAS_NUM_THREADS=1)")
         print(f"  before: {_load()}")
-        serial, batch, pool, user, same = end_to_end(takes, out, args.runs)
+        serial, batch, pool, user, loop, same = end_to_end(takes, out, args.runs)
         warm_serial, warm_batch = steady_state(takes, out, args.runs)
     print(f"  after:  {_load()}")
     _line("end to end (fresh processes: start-up, imports, cluster start and stop included)", serial, batch,
           args.files, pool)
     print(f"    the batch started without OPENBLAS_NUM_THREADS (a user's shell) {statistics.median(user):4.1f} s  "
           f"({', '.join(f'{x:.1f}' for x in user)})")
+    print(f"    beside: one `doodle compile FILE` process per file in turn (a shell loop) {statistics.median(loop):4.1f} s  "
+          f"({', '.join(f'{x:.1f}' for x in loop)}): the batch {statistics.median(loop) / statistics.median(batch):.2f}× "
+          "faster (start-up paid per file; the target is read against the one-process row above)")
     _line("steady state (everything loaded; a running cluster)", warm_serial, warm_batch, args.files)
     print(f"  batch outputs byte-identical to one-by-one: {'yes' if same else 'NO'}")
     return 0
