@@ -194,7 +194,7 @@ def test_held_out_clips_are_tested_on_both_procedures(tmp_path, monkeypatch):
     """Trained on one procedure (or both) applied to every clip of one folder, tested on both
     applied to the clips of another (named anything): six runs, each on clips it never saw;
     and each procedure learnt on the other test clips, each clip decided by the model that
-    left it out."""
+    left it out — left out, not failed, when there is one test clip."""
     import shutil
     from pathlib import Path
 
@@ -224,6 +224,10 @@ def test_held_out_clips_are_tested_on_both_procedures(tmp_path, monkeypatch):
     title = ec.held_out_title(rep)
     assert "every clip of train" in title and "the 2 clips of test" in title and "other clips of test" in title
     assert ec.table(rep, title)[0].startswith(title)
+    (tmp_path / "test" / "throw.bvh").unlink()  # one test clip: nothing to learn a procedure on beside it
+    rep = ec.held_out(tmp_path / "train", tmp_path / "test", variants=1, rates=(30.0,), scales={"human": 1.0})
+    assert set(rep["pooled"]) == {"emote → emote", "emote → stylize", "stylize → emote", "stylize → stylize",
+                                  "emote + stylize → emote", "emote + stylize → stylize"}
 
 
 def test_laban_eval_refuses_held_out_clips_it_cannot_read(tmp_path, capsys):
@@ -342,3 +346,37 @@ def test_the_worst_held_out_source_chooses_the_features(monkeypatch):
                                                        "both sources": ("Energy Spread",)})
     name, _, scores, _ = factors.choose(X, y, np.ones(2 * n), groups, "weight")
     assert name == "both sources", scores
+
+
+def test_each_held_out_clip_is_decided_by_the_model_that_left_it_out(monkeypatch):
+    """The legibility runs: a clip's paths are decided by the model trained on the OTHER clips
+    only (a fake trainer whose probabilities name the clips it saw)."""
+    from dataclasses import dataclass
+
+    import numpy as np
+
+    import laban.train
+    from doodle.app import effort_corpus as ec
+    from laban.procedures import Effortful
+
+    @dataclass
+    class Fake:
+        p: float
+
+        def probability(self, X):
+            return np.full(len(X), self.p)
+
+    def train(items, seed=0):
+        saw = {it.group for it in items}
+        return {"time": Fake(0.9 if saw == {"b"} else 0.1), "weight": Fake(0.9 if "a" in saw else 0.1)}
+
+    monkeypatch.setattr(laban.train, "train_factors", train)
+    t = np.linspace(0.0, 1.0, 60)
+    path = np.stack([np.sin(3 * t), t, 0 * t], axis=1)
+    q = np.tile([0.0, 0.0, 0.0, 1.0], (60, 1))
+    items = [Effortful(t, path, q, 1, -1, "emote", g) for g in ("a", "b")]
+    cells = ec._left_out_cells(items, items, [("human @ 30 Hz", 1.0, 30.0)], 0.6, 0)["human @ 30 Hz"]
+    # clip a: decided by the model that saw b alone (Sudden 0.9, Strong 0.1): both right
+    # clip b: decided by the model that saw a alone (Sudden 0.1, Strong 0.9): both wrong
+    assert cells["p_sudden"] == [0.9, 0.1] and cells["p_strong"] == [0.1, 0.9]
+    assert cells["time"] == 0.5 and cells["weight"] == 0.5 and cells["state"] == 0.5

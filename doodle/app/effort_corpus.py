@@ -248,7 +248,8 @@ def held_out(root=None, test_root=None, seed: int = 0, variants: int = 2, thresh
     * ``P on the other clips → P`` — what the features can read of procedure P at all: a
       model trained on P applied to the other test clips alone (no generator), each clip
       tested by the model that left it out. Where this is low, P's effort is not legible in a
-      single path's size- and rate-free features, whatever the training data.
+      single path's size- and rate-free features, whatever the training data. Only with two
+      test clips or more.
 
     A report as :func:`cross_procedure`'s."""
     from laban.train import THRESHOLD, train_factors
@@ -277,6 +278,8 @@ def held_out(root=None, test_root=None, seed: int = 0, variants: int = 2, thresh
                 "test": len(test),
                 "cells": {c: score_cell(factors, test, s, r, threshold, seed + k) for c, s, r in cells}})
     for k, (proc, test) in enumerate(tests.items()):
+        if len({it.group for it in test}) < 2:
+            continue
         report["runs"].append({"name": f"{proc} on the other held-out clips → {proc} (leave one clip out)",
                                "group": f"{proc} on the other clips → {proc}", "test": len(test),
                                "cells": _left_out_cells(made[proc], test, cells, threshold, seed + k)})

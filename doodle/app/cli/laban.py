@@ -281,8 +281,9 @@ def _held_out_folder(args) -> Path | None:
 
 def _held_out(args, folder: Path) -> dict:
     """The protocol on held-out clips (:func:`doodle.app.effort_corpus.held_out`): models
-    trained on the generator and one procedure applied to every ``--mocap`` clip, tested on
-    both applied to the clips in ``folder``."""
+    trained on the generator and one procedure (or both, as the shipped model) applied to
+    every ``--mocap`` clip, tested on both applied to the clips in ``folder``; with the
+    reliability of the shipped recipe's confidences there."""
     from doodle.app.effort_corpus import MOCAP, held_out, reliability, shipped_groups
 
     print(f"held-out clips: training on every clip, testing on {folder}", file=sys.stderr, flush=True)
