@@ -292,3 +292,32 @@ def test_a_malformed_csv_line_before_the_last_is_an_error(tmp_path, capsys):
     broken.write_text("\n".join(whole[:-1] + [whole[-1] + ",1"]) + "\n")  # a last line ended, but wrong
     assert refused(capsys, "info", "--convention", "openvr", broken) == \
         f"doodle: error: {broken}:{len(whole)}: 9 fields, expected 8"
+
+
+def test_effort_classify_reads_csv_recordings_with_their_convention(tmp_path, capsys, vive_files):
+    """``doodle laban classify`` takes a real Vive CSV as every other command does: its
+    convention asked for, then given (``--convention``, ``--tracks``); a hand that stayed
+    put is said to be left neutral and why; a CSV given to training is told how to get a
+    label."""
+    real = vive_files[0]
+    assert refused(capsys, "laban", "classify", "--whole", real) == (
+        f"doodle: error: {real}: a CSV file does not say its coordinate convention; pass --convention unity, "
+        "openvr or doodle")
+    code, out, err = cli(capsys, "laban", "classify", "--whole", "--convention", "unity", "--tracks", "c0", real)
+    assert code == 0 and not err and "P sudden" in out and out.count("(whole)") == 1, (out, err)
+    still = tmp_path / "still.csv"
+    t = np.arange(0, 2, 1 / 90)
+    rows = [f"{x:.4f},{0.01 * np.sin(x):.5f},1.2,0.3,0,0,0,1" for x in t]  # 1 cm of drift in 2 s
+    still.write_text("t,c0_px,c0_py,c0_pz,c0_qx,c0_qy,c0_qz,c0_qw\n" + "\n".join(rows) + "\n")
+    code, out, err = cli(capsys, "laban", "classify", "--whole", "--convention", "unity", still)
+    assert code == 0 and "(whole)" in out and "neutral, not read: still (within 3 cm and 11°)" in out, out
+    assert refused(capsys, "laban", "train", str(real), "-o", str(tmp_path / "m.npz")) == (
+        f"doodle: error: {real}: only doodle files carry a Drive label; convert it with `doodle import` and label "
+        "it with `doodle laban label`")
+
+
+def test_render_takes_csv_input_options():
+    from doodle.app.cli.main import build_parser
+
+    args = build_parser().parse_args(["render", "take.csv", "-o", "take.png", "--convention", "unity", "--tracks", "c0"])
+    assert (args.convention, args.tracks) == ("unity", "c0")

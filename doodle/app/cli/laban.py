@@ -11,6 +11,7 @@ import json
 import sys
 from pathlib import Path
 
+from doodle.app.cli.options import input_options
 from doodle.core.errors import DoodleError
 from doodle.core.files import output_dir, output_file
 
@@ -53,10 +54,11 @@ def add_arguments(p) -> None:
     q.set_defaults(run=cmd_eval)
 
     q = lsub.add_parser("classify", help="Time and Weight of each recognised action segment")
-    q.add_argument("files", nargs="+")
+    q.add_argument("files", nargs="+", help="doodle files (.doodle, or .csv with --convention)")
     q.add_argument("--model", metavar="MODEL.npz")
     q.add_argument("--whole", action="store_true", help="classify each track as one curve, not per action")
     q.add_argument("--json", action="store_true")
+    input_options(q)
     q.set_defaults(run=cmd_classify)
 
     q = lsub.add_parser("label", help="write the performed Drive into doodle files' headers")
@@ -99,6 +101,9 @@ def labelled(items, track: str = "c0") -> list:
 
     curves = []
     for path in _files(items):
+        if path.suffix.lower() == ".csv":
+            raise DoodleError(f"{path}: only doodle files carry a Drive label; convert it with `doodle import` and "
+                              "label it with `doodle laban label`")
         doodle = load(path)
         drive = doodle.meta.get("x-drive")
         if drive is None:
@@ -301,9 +306,19 @@ def _proxy(args, model) -> dict:
     return styled_proxy(model.factors, model.threshold, root=folder)
 
 
+def _unread() -> str:
+    """Why a segment's effort was not read (:func:`laban.classify.qualities` left it neutral)."""
+    import math
+
+    from laban.classify import MIN_SAMPLES, STILL_REACH, STILL_TURN
+
+    return (f"still (within {STILL_REACH * 100:g} cm and {math.degrees(STILL_TURN):.0f}°) or under {MIN_SAMPLES} "
+            "samples")
+
+
 def cmd_classify(args) -> int:
     from laban.models import load as load_model
-    from doodle.input.loader import load
+    from doodle.app.cli.options import load_input
     from doodle.app.pipeline import samples_of
     from laban.classify import qualities
     from grammar.recognizer import load_actions, recognize
@@ -315,7 +330,7 @@ def cmd_classify(args) -> int:
     failed = 0
     for path in args.files:
         try:
-            doodle = repaired(load(path), SegmenterParams().max_gap)  # Effort reads the poses
+            doodle = repaired(load_input(path, args, None), SegmenterParams().max_gap)  # Effort reads the poses
         except DoodleError as e:
             print(f"doodle: error: {e}", file=sys.stderr)
             failed += 1
@@ -332,15 +347,18 @@ def cmd_classify(args) -> int:
                 rows.append({"track": tr.name, "action": action, "start": round(float(tr.t[a]), 3),
                              "end": round(float(tr.t[min(b, len(tr.t) - 1)]), 3), "time": e.time, "weight": e.weight,
                              "p_sudden": round(e.p_sudden, 3), "p_strong": round(e.p_strong, 3),
-                             "drive": e.drive, "state": e.state})
+                             "drive": e.drive, "state": e.state, "read": bool(e.drive)})
         if args.json:
             print(json.dumps({"file": str(path), "segments": rows}))
             continue
         print(path)
         for r in rows:
-            print(f"  {r['track']} {r['start']:7.2f} {r['end']:7.2f}  {r['action']:<15} time {r['time']:+.2f} "
-                  f"(P sudden {r['p_sudden']:.2f})  weight {r['weight']:+.2f} (P strong {r['p_strong']:.2f})  "
-                  f"{r['drive'] or '-'}")
+            where = f"  {r['track']} {r['start']:7.2f} {r['end']:7.2f}  {r['action']:<15}"
+            if not r["read"]:
+                print(f"{where} neutral, not read: {_unread()}")
+                continue
+            print(f"{where} time {r['time']:+.2f} (P sudden {r['p_sudden']:.2f})  weight {r['weight']:+.2f} "
+                  f"(P strong {r['p_strong']:.2f})  {r['drive']}")
     return 1 if failed else 0
 
 

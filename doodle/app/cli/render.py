@@ -12,6 +12,7 @@ import time
 from pathlib import Path
 
 from doodle.core.errors import DoodleError
+from doodle.app.cli.options import input_options
 
 KINDS = {".png": "key-frame sheet", ".gif": "GIF", ".mp4": "MP4"}
 SHEET_FRAMES = 8
@@ -20,7 +21,7 @@ SHEET_COLUMNS = 4
 
 def add_arguments(p) -> None:
     """The arguments of ``doodle render``."""
-    p.add_argument("file", metavar="FILE")
+    p.add_argument("file", metavar="FILE", help="a doodle file (.doodle, or .csv with --convention)")
     p.add_argument("-o", "--output", required=True, metavar="OUT.png|gif|mp4")
     p.add_argument("--overwrite", action="store_true", help="replace OUT if it exists")
     p.add_argument("--library", metavar="DIR", help="a user library (folder with library.toml)")
@@ -30,6 +31,7 @@ def add_arguments(p) -> None:
     p.add_argument("--size", default="640x480", metavar="WxH", help="pixels per frame (default 640x480)")
     p.add_argument("--frames", type=int, metavar="N",
                    help=f"N frames spread over the clip (default: {SHEET_FRAMES} on a sheet, every frame in a video)")
+    input_options(p)
     p.set_defaults(run=cmd_render)
 
 
@@ -72,13 +74,13 @@ def cmd_render(args) -> int:
     output_file(out, args.overwrite)
     render.load_pyrender()  # no pyrender or EGL: say so before compiling
 
-    from doodle.input.loader import load
+    from doodle.app.cli.options import load_input
     from doodle.app.pipeline import compile_doodle
     from laban.models import load as load_effort_model
     from retarget.terrain import parse_terrain
 
     terrain = parse_terrain(args.terrain) if args.terrain else None
-    doodle = load(args.file)
+    doodle = load_input(args.file, args, None)
     results = compile_doodle(doodle, args.library, fps=args.fps, terrain=terrain, effort_model=load_effort_model(None))
     count = args.frames if args.frames is not None else (SHEET_FRAMES if suffix == ".png" else None)
     picks = render.frame_indices(results, frames=count)
