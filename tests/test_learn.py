@@ -376,3 +376,23 @@ def test_learning_real_gestures_as_before(user, gesture, track, expression, tol)
     learned = learn(examples, doodles[0].rate)
     assert learned.expression == expression and learned.tolerance == tol
     assert _plain_tolerance(learned.strings, 3) == tol
+
+
+def test_a_two_handed_action_compiles_where_it_was_performed(tmp_path, capsys):
+    """Compiled, a learned two-handed action stays that action on both tracks: its
+    characters are not walked up to each other as a Slap's are (nothing says they touch;
+    moved, the second hand no longer made the gesture and the scene read c0 unknown, c1 Jump),
+    and the missing clip is said, with where clips are listed."""
+    import json
+
+    files = _vive("backflip")
+    lib = tmp_path / "pair"
+    assert main(["learn", "Backflip", *files[:3], "--library", str(lib), "--convention", "unity",
+                 "--tracks", "c0,c1"]) == 0
+    capsys.readouterr()
+    assert main(["compile", files[3], "--library", str(lib), "--convention", "unity", "-o", str(tmp_path / "out")]) == 0
+    err = capsys.readouterr().err
+    report = json.loads((tmp_path / "out" / "report.json").read_text())
+    for track in ("c0", "c1"):
+        assert [s["action"] for s in report["tracks"][track]["segments"]] == ["Backflip"], report["tracks"][track]
+    assert "no clip of Backflip" in err and "clips = [" in err, err

@@ -217,7 +217,8 @@ def compile_doodle(doodle: Doodle, library_dir=None, use_builtin: bool = True, p
     for action, where in missing.items():
         warnings.warn(f"the library has no clip of {action} on its skeleton: {len(where)} segment"
                       f"{'s' * (len(where) != 1)} hold{'s' * (len(where) == 1)} the rest pose ({', '.join(where[:4])}"
-                      f"{', …' if len(where) > 4 else ''})")
+                      f"{', …' if len(where) > 4 else ''}); an action's clips are listed in its library.toml entry "
+                      "(clips = [\"clips/NAME.bvh\"])")
     for action, where in retargeted.items():
         own = any(not c.retargeted and c.motion.skeleton.names == skeleton.names for c in actions.clips.get(action, []))
         warnings.warn(f"the library has no clip of {action}{' travelling the way it means' if own else ''} on its "
@@ -503,7 +504,10 @@ def meet(doodle: Doodle, recognised: dict, scale: float, skip=frozenset(), actio
     :data:`MEET_DISTANCE`) — measured from where both really are when role 0's part begins,
     after their earlier walks (:func:`ground_paths`). A receiver that has not walked before
     is moved and turned from the start; one that has steps in before (a minimum-jerk move in
-    the doodle, read back as an implicit walk at about :data:`WALK_SPEED`)."""
+    the doodle, read back as an implicit walk at about :data:`WALK_SPEED`). A learned
+    two-handed action (``doodle learn --tracks c0,c1``: roles of one gesture, no interaction
+    of the library) is played where it was performed: nothing says its characters should
+    touch, and moving one would change the gesture the scene is read again by."""
     from doodle.app.placement import stand_in_front
 
     tracks = {tr.name: tr for tr in doodle.tracks}
@@ -511,6 +515,8 @@ def meet(doodle: Doodle, recognised: dict, scale: float, skip=frozenset(), actio
     changed = False
     for ta, a, tb, b in interaction_pairs(recognised):
         if a.interaction in skip:  # placed by its own configuration (doodle.app.placement)
+            continue
+        if actions is not None and a.interaction not in interactions:  # a learned two-handed action
             continue
         A, B = tracks[ta], tracks[tb]
         j = min(a.start, len(A.t) - 1)
