@@ -13,7 +13,12 @@ For each action segment, in order:
    point during follow-through and transition (§5.2 "Retiming Jump trajectory");
 5. the heading follows the path's direction while the character travels — turned by the
    clip's own direction of travel, so a side-step moves sideways and a walk back backwards
-   — and is held while it acts in place.
+   — and is held while it acts in place;
+6. a walking character travels no faster than its span's ``most_speed`` (:func:`limited`):
+   where the doodle runs ahead faster than any walk cycle can be played, the character keeps
+   to the same path but falls behind, catches up where the doodle slows, and the offset
+   takes whatever it is still behind at the span's end (as in step 3); a jump's flight
+   carries it no faster than :data:`JUMP_SPEED_MOST`, the way the doodle jumps.
 
 The ground is any :mod:`retarget.terrain` (flat, height field, mesh): the path's height is
 the ground's under it (a ray cast along gravity).
@@ -43,9 +48,26 @@ class Span:
     execution: tuple[float, float] = (0.0, 1.0)  # execution stage as fractions of the clip
     travel_yaw: float = 0.0  # direction the clip travels, relative to where it faces (radians
     # about +y): 0 walking forward, π/2 side-stepping left, π walking back
+    most_speed: float = np.inf  # m/s: the fastest the character travels here (:func:`limited`)
 
 
 JUMP_ALPHA = 2.5
+# How fast a walking character may travel (step 6). Faster than TRAVEL_MOST the built-in Walk,
+# played 3.4 times its own pace, swings a foot past the animation check's joint limit (15 m/s):
+# the main example compiled at larger scales passes with its walks at 4.0 m/s and pops at 4.7.
+# A clip that travels faster at its own pace (a run) may go up to OWN_PACE_MOST times that.
+TRAVEL_MOST = 4.0  # m/s
+OWN_PACE_MOST = 2.0
+# How fast a jump carries the character over the ground in its flight: the built-in Jump in
+# the main example (a 0.5 s flight) passes the check at 9.4 m/s and pops at 12.6 (the flight's
+# root speed taken off its joints' limit); a long jumper takes off at 9-10 m/s.
+JUMP_SPEED_MOST = 9.0  # m/s
+
+
+def travel_most(own_speed: float) -> float:
+    """The fastest (m/s) a character travels playing a clip that travels at ``own_speed``
+    (m/s) at its own pace."""
+    return max(TRAVEL_MOST, OWN_PACE_MOST * own_speed)
 
 
 def hermite_arc(start: np.ndarray, end: np.ndarray, w: np.ndarray, alpha: float = JUMP_ALPHA,
@@ -88,7 +110,17 @@ def world_path(t: np.ndarray, p: np.ndarray, spans: list[Span], scale: float,
             path[seg] = path[s.i0]
             offset = path[s.i0] - ground[min(s.i1, len(ground) - 1)]
         elif s.jumping:
+            leap = path[s.i1 - 1] - path[s.i0]
+            short = float(np.hypot(leap[0], leap[2])) > jump_reach(t[seg], s)
             path[seg] = _retimed_jump(t[seg], path[seg], s)
+            if short:  # landed short of the doodle: the rest starts from there
+                offset = path[s.i1 - 1] - ground[s.i1 - 1]
+        else:
+            laid = path[seg]
+            held = limited(t[seg], laid, s.most_speed)
+            if held is not laid:  # fell behind: the rest of the doodle starts from where it got to
+                path[seg] = held
+                offset = held[-1] - ground[s.i1 - 1]
     heading = _heading(t, path, spans, facing or 0.0)
     if terrain is not None:
         path[:, 1] = terrain.height(path[:, [0, 2]])
@@ -104,6 +136,63 @@ def world_path(t: np.ndarray, p: np.ndarray, spans: list[Span], scale: float,
             if s.jumping and s.i1 - s.i0 > 2:
                 path[s.i0:s.i1, 1] += _arc_lift(t[s.i0:s.i1], path[s.i0:s.i1], p[s.i0:s.i1], s, scale, jump_arc)
     return path, heading
+
+
+def limited(t: np.ndarray, path: np.ndarray, most: float) -> np.ndarray:
+    """A travelling span's ground path (n, 3) followed no faster than ``most`` m/s along the
+    ground: the same way, the character falling behind where the doodle runs ahead faster than
+    that, and catching up (never passing it) where the doodle slows. ``path`` itself (the same
+    object) where it is never too fast.
+
+    The distance covered ``u`` keeps to the doodle's ``s`` where it can: ``u_i = min(s_i,
+    u_{i-1} + most·Δt_i)``, a running minimum once the distance ``most`` allows is taken off."""
+    n = len(path)
+    if n < 2 or not np.isfinite(most):
+        return path
+    step = np.hypot(*np.diff(path[:, [0, 2]], axis=0).T)
+    allowed = most * np.maximum(np.diff(t), 0.0)
+    if np.all(step <= allowed * (1 + 1e-9)):
+        return path
+    s = np.concatenate([[0.0], np.cumsum(step)])
+    c = np.concatenate([[0.0], np.cumsum(allowed)])
+    u = c + np.minimum.accumulate(s - c)
+    k = np.clip(np.searchsorted(s, u, side="right") - 1, 0, n - 2)  # the doodle step each distance falls in
+    w = np.clip((u - s[k]) / np.maximum(step[k], 1e-12), 0.0, 1.0)
+    out = path[k] + w[:, None] * (path[k + 1] - path[k])
+    out[0] = path[0]
+    return out
+
+
+BEHIND_SAID = 0.1  # m: falling less than this far behind the doodle is not worth a word
+
+
+def overspeed(t: np.ndarray, p: np.ndarray, spans: list[Span], scale: float) -> list[tuple[Span, float, float, float]]:
+    """The spans of the doodle ``(t, p)`` (``scale`` world metres per doodle metre) that the
+    character cannot keep to, ending at least :data:`BEHIND_SAID` behind or short, each as
+    ``(span, asked, most, behind)``: a walk faster than its span's ``most_speed``
+    (:func:`limited`) — the fastest the doodle moves there and that most (m/s along the
+    ground, from one sample to the next) —, a jump farther than its flight allows — the
+    distance the doodle jumps and :func:`jump_reach` (m) —; and how far behind or short the
+    character ends (m)."""
+    out = []
+    for s in spans:
+        if s.in_place or s.i1 - s.i0 < 2:
+            continue
+        seg = slice(s.i0, s.i1)
+        ground = (p[seg] - p[s.i0]) * scale
+        ground[:, 1] = 0.0
+        if s.jumping:
+            far, most = float(np.hypot(*(ground[-1] - ground[0])[[0, 2]])), jump_reach(t[seg], s)
+            if far - most >= BEHIND_SAID:
+                out.append((s, far, most, far - most))
+            continue
+        held = limited(t[seg], ground, s.most_speed)
+        behind = float(np.hypot(*(held[-1] - ground[-1])[[0, 2]]))
+        if held is ground or behind < BEHIND_SAID:
+            continue
+        fastest = float(np.max(np.hypot(*np.diff(ground[:, [0, 2]], axis=0).T) / np.maximum(np.diff(t[seg]), 1e-9)))
+        out.append((s, fastest, s.most_speed, behind))
+    return out
 
 
 def _arc_lift(t: np.ndarray, points: np.ndarray, doodle: np.ndarray, span: Span, scale: float, mode: str) -> np.ndarray:
@@ -123,13 +212,25 @@ def _arc_lift(t: np.ndarray, points: np.ndarray, doodle: np.ndarray, span: Span,
 def _retimed_jump(t: np.ndarray, points: np.ndarray, span: Span) -> np.ndarray:
     """Travel only during execution (the flight), from where the segment takes off to
     where it lands: in a straight line at an even speed, as a body in the air moves,
-    whatever the hand's own pace and wobble on the way."""
+    whatever the hand's own pace and wobble on the way — and no farther than
+    :func:`jump_reach` over the ground."""
     if len(t) < 2:
         return points
     u = (t - t[0]) / max(t[-1] - t[0], 1e-9)
     a, b = span.execution
     w = np.clip((u - a) / max(b - a, 1e-6), 0.0, 1.0)
-    return points[0] + np.outer(w, points[-1] - points[0])
+    leap = points[-1] - points[0]
+    far, most = float(np.hypot(leap[0], leap[2])), jump_reach(t, span)
+    if far > most:
+        leap = leap * np.array([most / far, 1.0, most / far])
+    return points[0] + np.outer(w, leap)
+
+
+def jump_reach(t: np.ndarray, span: Span) -> float:
+    """How far (m) a jumping span's flight — its execution stage, over the samples' times
+    ``t`` — carries the character at most: :data:`JUMP_SPEED_MOST` for as long as it lasts."""
+    a, b = span.execution
+    return JUMP_SPEED_MOST * max(float(t[-1] - t[0]) * (b - a), 0.0)
 
 
 TURNING_SPEED = 0.3  # m/s: slower drift of the path (a hand at rest) does not turn the character

@@ -59,6 +59,30 @@ def test_the_main_example_performed_by_other_styles_passes(style):
     assert checks["c0"].passes, checks["c0"].summary()
 
 
+def test_a_doodle_faster_than_a_character_can_go_is_followed_at_its_pace_and_said():
+    """The main example laid out at 40 × the doodle (its walks asked at up to 12.6 m/s, its
+    jump 4.3 m in a 0.5 s flight): the walks keep to the path at 4 m/s and fall behind, the
+    jump flies as far as the doodle asks (within 9 m/s), the animation passes the check
+    (before: the walk cycles played several times their pace, joints at 22.6 m/s), and each
+    walk is said, with where."""
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        results = compile_doodle(load(DEMO), scale=40.0)
+    checks = check_scene({r.track: r.motion for r in results}, None, contacts=results[0].contacts,
+                         soles={r.track: r.sole for r in results})
+    assert checks["c0"].passes, checks["c0"].summary()
+    said = [str(w.message) for w in caught]
+    walks = [m for m in said if "faster than it can walk (4.0 m/s)" in m]
+    assert len(walks) == 3 and walks[0].startswith("c0 0.96–1.76 s: the doodle moves the character at up to "), said
+    assert not [m for m in said if "farther than its flight" in m], said  # 4.5 m in 0.5 s: it can
+    r = results[0]
+    speed = np.hypot(*np.diff(r.path[:, [0, 2]], axis=0).T) / r.motion.frame_time
+    jump = next(fr for s, fr in zip(r.segments, r.frame_ranges) if s.action == "Jump")
+    walking = np.ones(len(speed), bool)
+    walking[jump[0]:jump[1]] = False
+    assert speed[walking].max() <= 4.0 * 1.02 and speed.max() <= 9.0 * 1.02  # the jump's flight: at most 9 m/s
+
+
 @pytest.mark.skipif(not BANDAI.exists(), reason="needs ../shared/data/mocap/bandai")
 def test_the_main_example_with_a_real_mocap_library_passes(tmp_path):
     """Bandai's skeleton (its foot joints inside the shoe, a helper root on the floor) with

@@ -1,11 +1,14 @@
 """Trajectory transfer (§5.2): projection, in-place merging with a running offset, jump
-retiming and the beautified Hermite arcs, heading."""
+retiming and the beautified Hermite arcs, heading; a walk or a jump the doodle asks faster
+than a character can go."""
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from retarget.terrain import parse_terrain
-from retarget.trajectory import Span, hermite_arc, world_path
+from retarget.trajectory import JUMP_SPEED_MOST, Span, hermite_arc, limited, overspeed, world_path
 
 
 def test_hermite_arc_is_vertical_at_both_ends_with_the_thesis_apex():
@@ -67,3 +70,70 @@ def test_path_lies_on_the_terrain_and_faces_its_way():
     path, heading = world_path(t, p, spans, scale=10.0, terrain=terrain)
     assert np.allclose(path[:, 1], terrain.height(path[:, [0, 2]]))
     assert np.allclose(heading[10:-10], 0.0, atol=1e-6)  # walking along +z faces +z
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.integers(0, 10_000), st.floats(0.5, 6.0))
+def test_a_limited_walk_keeps_to_the_path_never_faster_and_never_ahead(seed, most):
+    rng = np.random.default_rng(seed)
+    n = int(rng.integers(2, 200))
+    t = np.cumsum(rng.uniform(0.005, 0.02, n))
+    path = np.cumsum(rng.normal(0.0, 0.05, (n, 3)) * rng.uniform(0.1, 3.0), axis=0)
+    path[:, 1] = 0.0
+    held = limited(t, path, most)
+    step = np.hypot(*np.diff(path[:, [0, 2]], axis=0).T)
+    if np.all(step <= most * np.diff(t)):
+        assert held is path  # a walk it can keep to is left as it is
+        return
+    moved = np.hypot(*np.diff(held[:, [0, 2]], axis=0).T)
+    assert np.all(moved <= most * np.diff(t) + 1e-9)  # never faster than it can walk
+    covered, asked = np.cumsum(moved), np.cumsum(step)
+    assert np.all(covered <= asked + 1e-9)  # never ahead of the doodle
+    assert np.array_equal(held[0], path[0])
+    # on the doodle's own path: each point lies on a segment between two doodle samples
+    a, d = path[:-1], np.diff(path, axis=0)
+    w = np.clip(np.einsum("pkj,kj->pk", held[:, None] - a[None], d) / np.maximum((d * d).sum(axis=1), 1e-300), 0, 1)
+    gap = np.linalg.norm(held[:, None] - (a[None] + w[..., None] * d[None]), axis=2).min(axis=1)
+    assert gap.max() < 1e-9
+
+
+def test_a_walk_too_fast_falls_behind_and_the_rest_follows_from_where_it_got_to():
+    rate = 90.0
+    t = np.arange(270) / rate
+    p = np.column_stack([np.zeros(270), np.zeros(270), np.zeros(270)])
+    p[90:180, 2] = np.linspace(0.0, 1.0, 90)  # 1 m of doodle in a second: 10 m/s at scale 10
+    p[180:, 2] = 1.0
+    spans = [Span("Idle", 0.0, 89 / rate, 0, 90, True, False, True),
+             Span("Walk", 90 / rate, 179 / rate, 90, 180, False, False, True, most_speed=4.0),
+             Span("Idle", 180 / rate, 269 / rate, 180, 270, True, False, True)]
+    path, _ = world_path(t, p, spans, scale=10.0)
+    speed = np.hypot(*np.diff(path[:, [0, 2]], axis=0).T) * rate
+    assert speed.max() <= 4.0 + 1e-9
+    assert path[179, 2] == pytest.approx(4.0 * 89 / rate, rel=0.02)  # as far as 4 m/s goes in the walk
+    assert np.ptp(path[180:, 2]) == 0.0 and abs(path[180, 2] - path[179, 2]) < 0.05  # stands where it got to
+    (span, asked, most, behind), = overspeed(t, p, spans, 10.0)
+    assert span.action == "Walk" and asked == pytest.approx(10.0 * rate / 89, rel=0.02) and most == 4.0
+    assert behind == pytest.approx(10.0 - 4.0 * 89 / rate, rel=0.02)
+    slow = [s if s.action != "Walk" else Span("Walk", s.t0, s.t1, s.i0, s.i1, False, False, True, most_speed=20.0)
+            for s in spans]
+    assert overspeed(t, p, slow, 10.0) == []
+    unlimited, _ = world_path(t, p, slow, scale=10.0)
+    assert unlimited[179, 2] == pytest.approx(10.0 * p[179, 2])  # a walk it can keep to is the doodle's
+
+
+def test_a_jump_farther_than_its_flight_can_carry_lands_short_the_way_it_jumped():
+    t, p, spans = doodle_with(lambda r: [("Walk", 0, 90, False, False), ("Jump", 90, 180, False, True),
+                                         ("Walk", 180, 270, False, False)])
+    p = p.copy()
+    p[90:180, 0] = np.linspace(0.0, 3.0, 90)  # 3 m sideways in the jump: 30 m at scale 10
+    p[180:, 0] = 3.0
+    path, _ = world_path(t, p, spans, scale=10.0)
+    flight = (spans[1].t1 - spans[1].t0) * 0.2  # execution (0.4, 0.6) of the span
+    leap = path[179] - path[90]
+    reach = JUMP_SPEED_MOST * flight
+    assert np.hypot(leap[0], leap[2]) == pytest.approx(reach, rel=1e-6)
+    asked = 10.0 * (p[179] - p[90])
+    assert np.allclose(leap[[0, 2]] / np.hypot(*leap[[0, 2]]), asked[[0, 2]] / np.hypot(*asked[[0, 2]]))
+    assert np.hypot(*(path[180] - path[179])[[0, 2]]) < 0.05  # the walk after it starts where it landed
+    (span, far, most, short), = overspeed(t, p, spans, 10.0)
+    assert span.action == "Jump" and most == pytest.approx(reach) and short == pytest.approx(far - reach)

@@ -312,7 +312,7 @@ def _span(seg, track, choice: Choice):
     """The segment's place on the doodle's timeline with what the trajectory transfer needs
     (flags, execution stage, the clip's own travel direction); and whether it travels."""
     from retarget.sequence import pelvis_travel
-    from retarget.trajectory import Span
+    from retarget.trajectory import Span, travel_most
 
     clip, action = choice.clip, choice.action
     n = clip.motion.frames
@@ -320,9 +320,11 @@ def _span(seg, track, choice: Choice):
     execution = (b["execution"][0] / max(n - 1, 1), b["execution"][1] / max(n - 1, 1))
     travel = pelvis_travel(clip.motion, int(clip.roles["pelvis"]))  # once per clip: segments share them
     travels = not action.in_place and float(np.linalg.norm(travel)) > 0.2  # a walk, a jump
+    most = travel_most(float(np.linalg.norm(travel)) / max((n - 1) * clip.motion.frame_time, 1e-9)) \
+        if not action.in_place and not action.jumping else np.inf
     span = Span(seg.action, float(track.t[seg.start]), float(track.t[min(seg.end, len(track.t) - 1)]),
                 seg.start, seg.end, action.in_place, action.jumping, action.cyclic, execution,
-                float(np.arctan2(travel[0], travel[1])) if travels else 0.0)
+                float(np.arctan2(travel[0], travel[1])) if travels else 0.0, most)
     return span, travels
 
 
@@ -333,7 +335,7 @@ def sequenced(track, segments, choices, times, skeleton, rest, scale, terrain, o
     from retarget.sequence import (Placed, blend_lengths, boundary_gaps, contact_states, entry_phase, paced,
                                    rising_blends, sequence, stride_scale)
     from retarget.timing import flight_times, in_flight, make_room, speed_limit
-    from retarget.trajectory import world_path
+    from retarget.trajectory import overspeed, world_path
 
     pieces, points, known = [], {}, {}
     for seg, choice in zip(segments, choices):  # one pass per clip while its forward kinematics is fresh
@@ -364,6 +366,14 @@ def sequenced(track, segments, choices, times, skeleton, rest, scale, terrain, o
     front = quat.rotate(track.q[:1], np.array([[0.0, 0.0, 1.0]]))[0]  # the figurine's front at the start
     path, heading = world_path(track.t, track.p, spans, scale, terrain, jump_arc, origin,
                                float(np.arctan2(front[0], front[2])))
+    for span, asked, most, behind in overspeed(track.t, track.p, spans, scale):
+        when = f"{track.name} {span.t0 - track.t[0]:.2f}–{span.t1 - track.t[0]:.2f} s"
+        warnings.warn(f"{when}: the doodle jumps the character {asked:.1f} m in {span.action}, farther than its "
+                      f"flight can carry it ({most:.1f} m): it lands {behind:.1f} m short (a smaller --scale keeps "
+                      "to the doodle)" if span.jumping else
+                      f"{when}: the doodle moves the character at up to {asked:.1f} m/s in {span.action}, faster than "
+                      f"it can walk ({most:.1f} m/s): it keeps to the path but ends {behind:.1f} m behind (a smaller "
+                      "--scale, or a slower doodle, keeps to it)")
     frame_path = np.column_stack([np.interp(times, track.t, path[:, k]) for k in range(3)])
     frame_heading = _eased(np.interp(times, track.t, np.unwrap(heading)), fps)
     step = np.linalg.norm(np.diff(frame_path[:, [0, 2]], axis=0), axis=1)
