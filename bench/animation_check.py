@@ -6,7 +6,8 @@ their feet rest) and the DeepMimic clips, each figure beside the check's limit โ
 must pass. Compiled: the main example with the built-in library (plain, styled with the
 effort model, on the Jacksboro terrain) and, when the Bandai import is possible, with the
 Bandai library; the main example, and every built-in action alone and inside a sequence,
-performed by other styles.
+performed by other styles; and real input nobody here made (the Vive recordings, real
+people's paths as figurine doodles: :func:`real_doodles`).
 ``python -m bench.animation_check``.
 """
 
@@ -198,8 +199,83 @@ def pairs() -> None:
                   f"contacts missed {len(c.missed)}, reaction leading {len(c.leads)} fr")
 
 
+VIVE = MOCAP.parent / "vive-gestures"
+FIGURINE = 8.5  # a person's path made a figurine's: the compile's default scale, undone
+
+
+def _cause(result, c) -> str:
+    """What a failing track fails on: pops in a jump (a flight squeezed into a short gesture),
+    other pops, sliding, characters passing through each other, or something else."""
+    if len(c.pops):
+        f = int(c.pops[0])
+        acts = {s.action for s, (a, b) in zip(result.segments, result.frame_ranges) if a <= f <= b}
+        return "pops in a jump or flip" if acts & {"Jump", "Flip", "Back Flip"} else "pops elsewhere"
+    if len(c.sliding):
+        return "sliding"
+    return "interpenetration" if "interpenetration 0 frames" not in c.summary() else "other"
+
+
+def real_doodles() -> None:
+    """Input nobody here made, compiled with the built-in library: every real Vive recording
+    (two hand-held controllers performing whole-body gestures, each a character here: hands
+    swung at several m/s), and every real person's pelvis path (Bandai, DeepMimic) made a
+    figurine's (รท 8.5, 90 Hz, held 0.8 m up); beside them, for reference, the real clips
+    themselves under the same check (:func:`real`: acrobatics and studio floors fail it too)."""
+    import collections
+
+    from doodle.app.pipeline import compile_doodle
+    from doodle.core.model import Doodle, Track
+    from doodle.input.loader import load
+    from retarget.analysis import guess_roles
+    from retarget.skeleton import forward_kinematics
+
+    def checked(doodle):
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            results = compile_doodle(doodle)
+        checks = check_scene({r.track: r.motion for r in results}, None, contacts=results[0].contacts,
+                             soles={r.track: r.sole for r in results})
+        return [(r, checks[r.track]) for r in results]
+
+    print("Animation check on real input compiled with the built-in library")
+    recordings = sorted(VIVE.glob("*/*/*.csv"))
+    if recordings:
+        causes, tracks = collections.Counter(), 0
+        for f in recordings:
+            for r, c in checked(load(f, "unity")):
+                tracks += 1
+                if not c.passes:
+                    causes[_cause(r, c)] += 1
+        print(f"  Vive recordings, {len(recordings)} files: {tracks - sum(causes.values())}/{tracks} tracks pass; "
+              f"failing: " + ", ".join(f"{k} {v}" for k, v in causes.most_common()))
+    clips = sorted(MOCAP.glob("bandai/dataset-*/*.bvh")) + sorted(MOCAP.glob("deepmimic/*.bvh"))
+    if not clips:
+        print("  ../shared/data/mocap is not here: skipped")
+        return
+    causes, themselves = collections.Counter(), 0
+    for f in clips:
+        m = read_bvh(f)
+        themselves += check(m).passes
+        pos, rot = forward_kinematics(m)
+        pelvis = guess_roles(m.skeleton).get("pelvis", 0)
+        t = np.arange(m.frames) * m.frame_time
+        tt = np.arange(0.0, t[-1], 1 / 90)
+        p = np.stack([np.interp(tt, t, pos[:, pelvis, k]) for k in range(3)], axis=1) / FIGURINE
+        p[:, 1] += 0.8
+        q = rot[np.clip(np.rint(tt / m.frame_time).astype(int), 0, m.frames - 1), pelvis]
+        (r, c), = checked(Doodle((Track("c0", tt, p, q, np.ones(len(tt), bool)),), 90.0))
+        if not c.passes:
+            causes[_cause(r, c)] += 1
+    print(f"  real people's pelvis paths as figurine doodles, {len(clips)} clips: "
+          f"{len(clips) - sum(causes.values())}/{len(clips)} pass"
+          + (f"; failing: " + ", ".join(f"{k} {v}" for k, v in causes.most_common()) if causes else "")
+          + f"  (for reference, the clips themselves: {themselves}/{len(clips)} pass)")
+
+
 def main() -> None:
     real()
+    print()
+    real_doodles()
     print()
     compiled()
     print()
