@@ -310,7 +310,8 @@ class _Unplayed:
 
 def _span(seg, track, choice: Choice):
     """The segment's place on the doodle's timeline with what the trajectory transfer needs
-    (flags, execution stage, the clip's own travel direction); and whether it travels."""
+    (flags, execution stage, the clip's own travel direction, how fast it may travel:
+    :func:`retarget.trajectory.travel_most` of the clip's own pace); and whether it travels."""
     from retarget.sequence import pelvis_travel
     from retarget.trajectory import Span, travel_most
 
