@@ -433,3 +433,16 @@ def test_forward_kinematics_is_kept_read_only_for_clips_and_computed_for_long_mo
                   clip.frame_time)
     a, b = forward_kinematics(long), forward_kinematics(long)
     assert a[0] is not b[0] and a[0].flags.writeable and np.array_equal(a[0], b[0])
+
+
+def test_cache_entries_are_not_synced_to_the_disk_and_outputs_are(cache_dir, tmp_path, monkeypatch):
+    """A first run does not wait on the disk for its cache entries (one a power cut empties
+    reads as absent and is rebuilt: the "empty" damage above); an output is synced."""
+    from doodle.core import files
+
+    synced = []
+    monkeypatch.setattr(files.os, "fsync", lambda fd: synced.append(fd))
+    assert cache.write("clips", "0" * 64, {"a": np.arange(3)})
+    assert synced == [] and np.array_equal(cache.read("clips", "0" * 64)["a"], np.arange(3))
+    files.atomic_write(tmp_path / "out.txt", ["kept\n"])
+    assert len(synced) == 1 and (tmp_path / "out.txt").read_text() == "kept\n"

@@ -12,7 +12,9 @@ action library: :mod:`doodle.app.libcache`), so a second run does not redo it.
 * **Safe**: written atomically (a temporary file renamed over the name:
   :func:`doodle.core.files.atomic_write`), so a reader never sees half an entry; a missing,
   truncated or corrupt entry reads as absent (and is rebuilt by the caller); a folder that
-  cannot be made or written is skipped. The cache can only make a run faster, never fail
+  cannot be made or written is skipped. Entries are not synced to the disk before the
+  rename (an output is): one a power cut empties reads as absent, and a first run does not
+  wait on the disk. The cache can only make a run faster, never fail
   it — and the folder can be deleted at any time.
 * **Size**: the :data:`KEEP` most recently used entries are kept, older ones removed when
   a new one is written. Entries are named ``doodle-KIND-HASH.npz``; nothing else in the
@@ -99,7 +101,7 @@ def write(kind: str, key: str, arrays: dict) -> bool:
         path.parent.mkdir(parents=True, exist_ok=True)
         buf = io.BytesIO()
         np.savez(buf, **arrays)
-        atomic_write(path, buf.getvalue())
+        atomic_write(path, buf.getvalue(), sync=False)  # lost in a power cut: unreadable, so rebuilt
     except (DoodleError, OSError, ValueError):
         return False
     prune(path.parent)

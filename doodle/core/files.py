@@ -33,16 +33,18 @@ def atomic_path(path) -> Iterator[str]:
         raise DoodleError(f"{path}: cannot write: {exc.strerror or exc}") from None
 
 
-def atomic_write(path, chunks: Iterable[str] | bytes) -> None:
+def atomic_write(path, chunks: Iterable[str] | bytes, sync: bool = True) -> None:
     """Write the text ``chunks`` (or one ``bytes``) to ``path`` atomically (:func:`atomic_path`),
-    synced to the disk before the rename."""
+    synced to the disk before the rename unless ``sync`` is False (a file that may be lost in
+    a power cut, as a cache entry that is rebuilt when it cannot be read back)."""
     binary = isinstance(chunks, bytes)
     with atomic_path(path) as tmp:
         with open(tmp, "wb") if binary else open(tmp, "w", encoding="utf-8", newline="\n") as fh:
             for text in [chunks] if binary else chunks:
                 fh.write(text)
             fh.flush()
-            os.fsync(fh.fileno())
+            if sync:
+                os.fsync(fh.fileno())
 
 
 @contextlib.contextmanager
