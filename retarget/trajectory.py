@@ -113,14 +113,14 @@ def world_path(t: np.ndarray, p: np.ndarray, spans: list[Span], scale: float,
             leap = path[s.i1 - 1] - path[s.i0]
             short = float(np.hypot(leap[0], leap[2])) > jump_reach(t[seg], s)
             path[seg] = _retimed_jump(t[seg], path[seg], s)
-            if short:  # landed short of the doodle: the rest starts from there
-                offset = path[s.i1 - 1] - ground[s.i1 - 1]
+            if short:  # landed short of the doodle: the rest starts from there (no step between samples)
+                offset = path[s.i1 - 1] - ground[min(s.i1, len(ground) - 1)]
         else:
             laid = path[seg]
             held = limited(t[seg], laid, s.most_speed)
-            if held is not laid:  # fell behind: the rest of the doodle starts from where it got to
+            if held is not laid:  # fell behind: the rest starts from where it got to (no step between samples)
                 path[seg] = held
-                offset = held[-1] - ground[s.i1 - 1]
+                offset = held[-1] - ground[min(s.i1, len(ground) - 1)]
     heading = _heading(t, path, spans, facing or 0.0)
     if terrain is not None:
         path[:, 1] = terrain.height(path[:, [0, 2]])

@@ -101,8 +101,8 @@ def test_a_walk_too_fast_falls_behind_and_the_rest_follows_from_where_it_got_to(
     rate = 90.0
     t = np.arange(270) / rate
     p = np.column_stack([np.zeros(270), np.zeros(270), np.zeros(270)])
-    p[90:180, 2] = np.linspace(0.0, 1.0, 90)  # 1 m of doodle in a second: 10 m/s at scale 10
-    p[180:, 2] = 1.0
+    p[90:200, 2] = np.arange(110) / 90.0  # 0.1 m of doodle in 0.1 s, and on into the Idle: 10 m/s at scale 10
+    p[200:, 2] = p[199, 2]
     spans = [Span("Idle", 0.0, 89 / rate, 0, 90, True, False, True),
              Span("Walk", 90 / rate, 179 / rate, 90, 180, False, False, True, most_speed=4.0),
              Span("Idle", 180 / rate, 269 / rate, 180, 270, True, False, True)]
@@ -110,15 +110,16 @@ def test_a_walk_too_fast_falls_behind_and_the_rest_follows_from_where_it_got_to(
     speed = np.hypot(*np.diff(path[:, [0, 2]], axis=0).T) * rate
     assert speed.max() <= 4.0 + 1e-9
     assert path[179, 2] == pytest.approx(4.0 * 89 / rate, rel=0.02)  # as far as 4 m/s goes in the walk
-    assert np.ptp(path[180:, 2]) == 0.0 and abs(path[180, 2] - path[179, 2]) < 0.05  # stands where it got to
+    assert np.ptp(path[180:, 2]) == 0.0 and np.allclose(path[180], path[179], rtol=0, atol=1e-12)  # stands where it got to
     (span, asked, most, behind), = overspeed(t, p, spans, 10.0)
-    assert span.action == "Walk" and asked == pytest.approx(10.0 * rate / 89, rel=0.02) and most == 4.0
-    assert behind == pytest.approx(10.0 - 4.0 * 89 / rate, rel=0.02)
+    assert span.action == "Walk" and asked == pytest.approx(10.0, rel=0.02) and most == 4.0
+    assert behind == pytest.approx(10.0 * 89 / rate - 4.0 * 89 / rate, rel=0.02)
     slow = [s if s.action != "Walk" else Span("Walk", s.t0, s.t1, s.i0, s.i1, False, False, True, most_speed=20.0)
             for s in spans]
     assert overspeed(t, p, slow, 10.0) == []
     unlimited, _ = world_path(t, p, slow, scale=10.0)
     assert unlimited[179, 2] == pytest.approx(10.0 * p[179, 2])  # a walk it can keep to is the doodle's
+    assert unlimited[180, 2] - unlimited[179, 2] == pytest.approx(10.0 / rate)  # and on, one doodle step
 
 
 def test_a_jump_farther_than_its_flight_can_carry_lands_short_the_way_it_jumped():
@@ -134,6 +135,6 @@ def test_a_jump_farther_than_its_flight_can_carry_lands_short_the_way_it_jumped(
     assert np.hypot(leap[0], leap[2]) == pytest.approx(reach, rel=1e-6)
     asked = 10.0 * (p[179] - p[90])
     assert np.allclose(leap[[0, 2]] / np.hypot(*leap[[0, 2]]), asked[[0, 2]] / np.hypot(*asked[[0, 2]]))
-    assert np.hypot(*(path[180] - path[179])[[0, 2]]) < 0.05  # the walk after it starts where it landed
+    assert np.allclose(path[180], path[179], rtol=0, atol=1e-12)  # the walk after it starts where it landed
     (span, far, most, short), = overspeed(t, p, spans, 10.0)
     assert span.action == "Jump" and most == pytest.approx(reach) and short == pytest.approx(far - reach)
