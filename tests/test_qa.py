@@ -92,14 +92,18 @@ def test_compile_reports_the_check_and_qa_reads_it(tmp_path, capsys):
 
 
 @needs_mocap
-def test_qa_passes_a_real_walk_and_refuses_what_is_not_a_scene(tmp_path, capsys):
+def test_qa_passes_a_real_walk_alone_or_in_a_folder_and_refuses_what_is_not_a_scene(tmp_path, capsys):
     from doodle.app.cli.main import main
 
     write_bvh(tmp_path / "walk.bvh", _walk())
     assert main(["qa", str(tmp_path)]) == 0
     assert "passes" in capsys.readouterr().out
-    assert main(["qa", str(tmp_path / "walk.bvh")]) == 1
-    assert "not a folder" in capsys.readouterr().err
+    assert main(["qa", str(tmp_path / "walk.bvh")]) == 0  # one clip, on its own floor
+    out = capsys.readouterr().out
+    assert out.startswith(f"{tmp_path / 'walk.bvh'}: ") and "passes" in out
+    (tmp_path / "notes.txt").write_text("not a scene")
+    assert main(["qa", str(tmp_path / "notes.txt")]) == 1
+    assert "notes.txt: not a folder or a BVH file" in capsys.readouterr().err
 
 
 @needs_mocap

@@ -1,4 +1,4 @@
-"""``doodle qa OUTDIR``: the animation check (:mod:`retarget.qa`) of a compiled scene —
+"""``doodle qa OUTDIR|FILE.bvh``: the animation check (:mod:`retarget.qa`) of a compiled scene —
 feet sliding, pops, one-frame turns, hovering and sinking, characters interpenetrating,
 interaction contacts missed and reactions leading their cause (from report.json's
 ``interactions``) — each with the frames it happens in."""
@@ -17,7 +17,8 @@ EXIT_FAILS = 4  # the animation fails the check (bad input is 1)
 def add_arguments(p) -> None:
     """The arguments of ``doodle qa``."""
     p.add_argument("folder", metavar="OUTDIR",
-                   help="what `doodle compile -o OUTDIR` wrote, or a folder of BVH files (each on its own floor)")
+                   help="what `doodle compile -o OUTDIR` wrote, or a folder of BVH files, or one BVH file (each on "
+                        "its own floor)")
     p.add_argument("--terrain", metavar="SPEC", help="the ground (default: the one report.json names, else flat)")
     p.add_argument("-v", "--verbose", action="store_true", help="list the frames of every finding")
     p.set_defaults(run=cmd_qa)
@@ -29,11 +30,16 @@ def cmd_qa(args) -> int:
     from retarget.terrain import parse_terrain
 
     folder = Path(args.folder)
-    if not folder.is_dir():
-        raise DoodleError(f"{folder}: not a folder (give what `doodle compile -o` wrote)")
+    one = folder.is_file() and folder.suffix.lower() == ".bvh"
+    if one:
+        folder = folder.parent
+    elif not folder.is_dir():
+        raise DoodleError(f"{folder}: not a folder or a BVH file (give what `doodle compile -o` wrote)")
     report_path = folder / "report.json"
     spec, ground, contacts, soles = args.terrain, 0.0, (), {}
-    if report_path.exists():
+    if one:  # a clip on its own: its floor where its feet rest
+        paths, ground = [Path(args.folder)], None
+    elif report_path.exists():
         try:
             report = json.loads(report_path.read_text(encoding="utf-8"))
             # the BVH files beside it, as compile writes them: a report someone sends names no other file
