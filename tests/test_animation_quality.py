@@ -83,6 +83,25 @@ def test_a_doodle_faster_than_a_character_can_go_is_followed_at_its_pace_and_sai
     assert speed[walking].max() <= 4.0 * 1.02 and speed.max() <= 9.0 * 1.02  # the jump's flight: at most 9 m/s
 
 
+def test_a_one_shot_action_given_less_time_than_it_needs_is_said():
+    """A quick small performer's jump (0.6 s, the stands around it too short to lend the rest)
+    is played faster than a person jumps: compile says so, with where and how long it needs;
+    the same jump performed at the main example's pace is not said."""
+    from doodle.synth.performers import MAIN_EXAMPLE, perform, style_grid
+
+    quick = next(s for s in style_grid() if s.label().startswith("size×0.5 tempo×0.6 pause 0.15 s"))
+    for doodle, said_for in ((perform(MAIN_EXAMPLE, quick, seed=3)[0], True), (load(DEMO), False)):
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            compile_doodle(doodle)
+        said = [str(w.message) for w in caught if "for every joint to keep under a person's fastest" in str(w.message)]
+        if said_for:
+            assert len(said) == 1 and said[0].startswith("c0 1.97–2.58 s: Jump has 0.61 s "), said
+            assert "its clip needs 0.97 s" in said[0]
+        else:
+            assert said == []
+
+
 @pytest.mark.skipif(not BANDAI.exists(), reason="needs ../shared/data/mocap/bandai")
 def test_the_main_example_with_a_real_mocap_library_passes(tmp_path):
     """Bandai's skeleton (its foot joints inside the shoe, a helper root on the floor) with

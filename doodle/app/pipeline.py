@@ -27,6 +27,7 @@ from library.manifest import load_combined
 
 CHARACTER_HEIGHT = 1.7  # metres
 PROP_SIZE = 0.2  # metres: a 20 cm figurine plays a 1.7 m character
+SQUEEZE_SAID = 0.05  # s: a one-shot clip squeezed into less time than it needs by more than this is said
 
 
 @dataclass(frozen=True, eq=False)
@@ -334,7 +335,7 @@ def sequenced(track, segments, choices, times, skeleton, rest, scale, terrain, o
     """One track's chosen clips laid on its path and sequenced on the timeline, with what
     :func:`finish` needs (the clips' contacts where ``pin``)."""
     from retarget.sequence import (Placed, blend_lengths, boundary_gaps, contact_states, entry_phase, paced,
-                                   rising_blends, sequence, stride_scale)
+                                   rising_blends, sequence, shortest, stride_scale)
     from retarget.timing import flight_times, in_flight, make_room, speed_limit
     from retarget.trajectory import overspeed, world_path
 
@@ -358,6 +359,14 @@ def sequenced(track, segments, choices, times, skeleton, rest, scale, terrain, o
     pieces = _transition_points(pieces, points)
     limits = [speed_limit(pc, _jump_travel(pc.span, track, scale)) for pc in pieces]
     pieces = make_room(pieces, track.t, limits, [c.clip.stages for c in choices])
+    for pc, limit in zip(pieces, limits):  # what no room could be found for: played faster than a person can
+        if pc.cycles == 0 and pc.progress is None and pc.gesture is None:
+            need, given = shortest(pc.motion, pc.clip_in, pc.clip_out, limit, flight_times(pc)), pc.span.t1 - pc.span.t0
+            if need > given + SQUEEZE_SAID:
+                warnings.warn(f"{track.name} {pc.span.t0 - track.t[0]:.2f}–{pc.span.t1 - track.t[0]:.2f} s: "
+                              f"{pc.span.action} has {given:.2f} s with what the stands around it could lend, and "
+                              f"its clip needs {need:.2f} s for every joint to keep under a person's fastest: it is "
+                              "played faster (a slower gesture, or a pause beside it, gives it room)")
     pieces = [replace(pc, pace=paced(pc.motion, pc.clip_in, pc.clip_out, pc.span.t1 - pc.span.t0, limit,
                                      flight_times(pc), None if pc.contacts is None else ~pc.contacts.all(axis=1)))
               if pc.cycles == 0 and pc.progress is None and pc.gesture is None else pc
