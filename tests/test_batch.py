@@ -91,16 +91,17 @@ def test_a_bad_file_fails_alone_in_its_row(batch_run):
     assert "Traceback" not in done.stderr + done.stdout
     assert done.stderr == ""  # no log lines of Dask's, no progress bar (not a terminal)
     lines = done.stdout.splitlines()
-    assert lines[0].split() == ["file", "status", "tracks", "frames", "seconds", "error"]
+    assert lines[0].split() == ["file", "status", "tracks", "frames", "check", "seconds", "error"]
     rows = {line.split()[0]: line for line in lines[1:-1]}
     assert list(rows) == [str(tmp / "takes" / f"{n}.doodle") for n in ("broken", "side", "stomp", "walk")] + [
         str(tmp / "gone.doodle")]
     for p in good:
-        status, tracks, frames = rows[str(p)].split()[1:4]
+        status, tracks, frames, check = rows[str(p)].split()[1:5]
         report = json.loads((tmp / "out" / p.stem / "report.json").read_text())
         assert (status, tracks, frames) == ("ok", "1", str(report["tracks"]["c0"]["frames"]))
-    broken = rows[str(tmp / "takes" / "broken.doodle")].split(None, 5)
-    assert broken[1:4] == ["error", "-", "-"] and broken[5].startswith(f"{tmp / 'takes' / 'broken.doodle'}:")
+        assert check == ("passes" if report["tracks"]["c0"]["check"]["passes"] else "FAILS")
+    broken = rows[str(tmp / "takes" / "broken.doodle")].split(None, 6)
+    assert broken[1:5] == ["error", "-", "-", "-"] and broken[6].startswith(f"{tmp / 'takes' / 'broken.doodle'}:")
     assert rows[str(tmp / "gone.doodle")].endswith(f"{tmp / 'gone.doodle'}: no such file")
     assert lines[-1] == f"3 of 5 files compiled, each into {tmp / 'out' / 'STEM'}/; 2 failed"
     assert not (tmp / "out" / "broken").exists() and not (tmp / "out" / "gone").exists()
@@ -127,7 +128,7 @@ def test_a_running_scheduler_compiles_the_same(batch_run, tmp_path, capsys, monk
 
 
 def _loaded(file, out, options):
-    return int("doodle.app.pipeline" in sys.modules), 0
+    return int("doodle.app.pipeline" in sys.modules), 0, ()
 
 
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="workers are forked on Linux only")
@@ -142,7 +143,7 @@ def test_local_workers_start_with_what_this_process_loaded():
 
 
 def _malloc_setting(file, out, options):
-    return int("MALLOC_TRIM_THRESHOLD_" in os.environ), 0
+    return int("MALLOC_TRIM_THRESHOLD_" in os.environ), 0, ()
 
 
 def test_a_local_cluster_leaves_malloc_alone(monkeypatch):
@@ -212,24 +213,29 @@ def test_a_job_never_raises():
     def ok(file, out, options):
         warnings.warn(f"{file}: last row is incomplete")
         warnings.warn(f"{file}: last row is incomplete")
-        return 2, 90
+        return 2, 90, ("c1",)
 
     job = batch.Job("a.doodle", Path("out/a"))
     assert batch.run_job(bad_input, job, None).error == "a.doodle:3: not a number (line two)"
     assert batch.run_job(bug, job, None).error == "internal error: KeyError: 'x'"
     row = batch.run_job(ok, job, None)
-    assert (row.status, row.tracks, row.frames, row.warnings) == ("ok", 2, 90, ("a.doodle: last row is incomplete",))
+    assert (row.status, row.tracks, row.frames, row.warnings, row.failing) == (
+        "ok", 2, 90, ("a.doodle: last row is incomplete",), ("c1",))
 
 
 def test_the_table():
     rows = [batch.Row("takes/walk.doodle", "ok", 1, 61, 1.234),
+            batch.Row("takes/pair.doodle", "ok", 2, 300, 2.5, failing=("c1",)),
             batch.Row("gone.doodle", "error", seconds=0.01, error="gone.doodle: no such file")]
     assert batch.table(rows) == [
-        "file               status  tracks  frames  seconds  error",
-        "takes/walk.doodle  ok           1      61      1.2",
-        "gone.doodle        error        -       -      0.0  gone.doodle: no such file",
+        "file               status  tracks  frames  check     seconds  error",
+        "takes/walk.doodle  ok           1      61  passes        1.2",
+        "takes/pair.doodle  ok           2     300  FAILS c1      2.5",
+        "gone.doodle        error        -       -  -             0.0  gone.doodle: no such file",
     ]
-    assert batch.summary(rows, "out") == "1 of 2 files compiled, each into out/STEM/; 1 failed"
+    assert batch.summary(rows, "out") == ("2 of 3 files compiled, each into out/STEM/; 1 failed; 1 fails the "
+                                          "animation check (`doodle qa out/STEM -v` lists the frames)")
+    assert batch.summary(rows[:1], "out") == "1 of 1 file compiled, each into out/STEM/"
 
 
 def test_a_batch_job_computes_with_one_blas_thread():
@@ -242,7 +248,7 @@ def test_a_batch_job_computes_with_one_blas_thread():
     from doodle.app import batch
 
     def blas_threads(file, out, options):
-        return max(lib["num_threads"] for lib in threadpool_info() if lib["user_api"] == "blas"), 0
+        return max(lib["num_threads"] for lib in threadpool_info() if lib["user_api"] == "blas"), 0, ()
 
     with threadpool_limits(limits=2, user_api="blas"):
         batch._PINNED.clear()  # as a fresh worker

@@ -54,8 +54,9 @@ class Job:
 
 @dataclass(frozen=True)
 class Row:
-    """One file's outcome: ``status`` "ok" (with its tracks and frames) or "error" (with a
-    one-line ``error``); ``seconds`` the compile took on its worker; its warnings."""
+    """One file's outcome: ``status`` "ok" (with its tracks, frames and the tracks whose
+    animation fails the check) or "error" (with a one-line ``error``); ``seconds`` the compile
+    took on its worker; its warnings."""
 
     file: str
     status: str
@@ -64,6 +65,7 @@ class Row:
     seconds: float = 0.0
     error: str = ""
     warnings: tuple[str, ...] = ()
+    failing: tuple[str, ...] = ()
 
 
 # --- inputs and outputs -------------------------------------------------------------------
@@ -170,20 +172,22 @@ def _one_blas_thread() -> None:
 
 
 def run_job(work: Callable, job: Job, options) -> Row:
-    """``work(file, out, options) -> (tracks, frames)`` for one job, timed, with this
-    process's BLAS on one thread (:func:`_one_blas_thread`); any failure is the job's row
-    ("error", its message in one line), never an exception."""
+    """``work(file, out, options) -> (tracks, frames, failing tracks)`` for one job, timed,
+    with this process's BLAS on one thread (:func:`_one_blas_thread`); any failure is the
+    job's row ("error", its message in one line), never an exception."""
     _one_blas_thread()
     start = time.perf_counter()
+    failing: tuple[str, ...] = ()
     with _warnings_of_this_thread() as caught:
         try:
-            tracks, frames = work(job.file, job.out, options)
+            tracks, frames, failing = work(job.file, job.out, options)
             status, error = "ok", ""
         except DoodleError as e:
             status, error, tracks, frames = "error", one_line(e), None, None
         except Exception as e:  # a bug, not bad input: still one line, the other files go on
             status, error, tracks, frames = "error", one_line(f"internal error: {type(e).__name__}: {e}"), None, None
-    return Row(job.file, status, tracks, frames, time.perf_counter() - start, error, tuple(dict.fromkeys(caught)))
+    return Row(job.file, status, tracks, frames, time.perf_counter() - start, error, tuple(dict.fromkeys(caught)),
+               tuple(failing))
 
 
 # --- the cluster ----------------------------------------------------------------------------
@@ -273,25 +277,35 @@ def run(jobs: list[Job], work: Callable, options, workers: int, scheduler: str |
 
 # --- what is printed ------------------------------------------------------------------------
 
+def _check(r: Row) -> str:
+    if r.status != "ok":
+        return "-"
+    return f"FAILS {','.join(r.failing)}" if r.failing else "passes"
+
+
 def table(rows: list[Row]) -> list[str]:
-    """The summary table: per file its status, tracks, frames, seconds and error."""
-    head = ("file", "status", "tracks", "frames", "seconds", "error")
+    """The summary table: per file its status, tracks, frames, the animation check (the
+    tracks that fail it), seconds and error."""
+    head = ("file", "status", "tracks", "frames", "check", "seconds", "error")
     cells = [(r.file, r.status, "-" if r.tracks is None else str(r.tracks), "-" if r.frames is None else str(r.frames),
-              f"{r.seconds:.1f}", r.error) for r in rows]
-    width = [max(len(c[k]) for c in [head, *cells]) for k in range(5)]
+              _check(r), f"{r.seconds:.1f}", r.error) for r in rows]
+    width = [max(len(c[k]) for c in [head, *cells]) for k in range(6)]
     lines = []
     for c in [head, *cells]:
         left = f"{c[0]:<{width[0]}}  {c[1]:<{width[1]}}"
-        right = "  ".join(f"{c[k]:>{width[k]}}" for k in (2, 3, 4))
-        lines.append(f"{left}  {right}  {c[5]}".rstrip())
+        right = f"{c[2]:>{width[2]}}  {c[3]:>{width[3]}}  {c[4]:<{width[4]}}  {c[5]:>{width[5]}}"
+        lines.append(f"{left}  {right}  {c[6]}".rstrip())
     return lines
 
 
 def summary(rows: list[Row], outdir) -> str:
     ok = sum(r.status == "ok" for r in rows)
     failed = len(rows) - ok
+    failing = sum(bool(r.failing) for r in rows if r.status == "ok")
     return (f"{ok} of {len(rows)} file{'s' * (len(rows) != 1)} compiled, each into {Path(outdir) / 'STEM'}/"
-            + (f"; {failed} failed" if failed else ""))
+            + (f"; {failed} failed" if failed else "")
+            + (f"; {failing} fail{'s' * (failing == 1)} the animation check (`doodle qa "
+               f"{Path(outdir) / 'STEM'} -v` lists the frames)" if failing else ""))
 
 
 def show_warnings(rows: list[Row]) -> None:

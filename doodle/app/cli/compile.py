@@ -152,11 +152,14 @@ def print_compiled(report: dict, checks: dict, args) -> None:
     print(f"{out / 'report.json'}" + (f"; preview: {', '.join(report['preview'])}" if args.preview else ""))
 
 
-def compiled_counts(file, output, args) -> tuple[int, int]:
+def compiled_counts(file, output, args) -> tuple[int, int, tuple[str, ...]]:
     """One file of a batch (run on a Dask worker): compiled as :func:`compile_scene` does
-    alone, nothing printed; its number of tracks and of frames."""
+    alone, nothing printed; its number of tracks and of frames, and the tracks whose
+    animation fails the check."""
     report, _ = compile_scene(file, output, args)
-    return len(report["tracks"]), max((t["frames"] for t in report["tracks"].values()), default=0)
+    tracks = report["tracks"]
+    return (len(tracks), max((t["frames"] for t in tracks.values()), default=0),
+            tuple(name for name, t in tracks.items() if not t.get("check", {}).get("passes", True)))
 
 
 def check_batch_options(args) -> None:
