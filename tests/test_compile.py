@@ -37,17 +37,6 @@ def test_demo_compiles_to_the_recognised_sequence(compiled):
     assert len(track["transitions"]) == len(FIG_4_7) - 1
     assert set(track["metrics"]) == {"ground_penetration_m", "root_deviation_m",
                                      "transition_smoothness"}
-    assert report["warnings"] == []
-
-
-def test_what_compile_warns_of_is_kept_in_the_report(tmp_path, capsys):
-    """Each warning said on stderr once, in order, and kept in report.json's ``warnings``: the
-    main example laid out at 40 × the doodle, its walks asked faster than a character walks."""
-    assert main(["compile", str(DEMO), "-o", str(tmp_path), "--scale", "40"]) == 0
-    err = [line for line in capsys.readouterr().err.splitlines() if line.startswith("doodle: warning: ")]
-    kept = json.loads((tmp_path / "report.json").read_text())["warnings"]
-    assert err == [f"doodle: warning: {w}" for w in kept] and len(kept) == 3
-    assert kept[0].startswith("c0 0.96–1.76 s: the doodle moves the character at up to ")
 
 
 def test_root_follows_the_doodle_and_stays_put_in_place(compiled):

@@ -3,7 +3,6 @@ doodles (or folders of them) at once on Dask (:mod:`doodle.app.batch`)."""
 
 from __future__ import annotations
 
-import contextlib
 import json
 from pathlib import Path
 
@@ -79,22 +78,6 @@ def check_numbers(args) -> None:
         raise DoodleError(f"--threshold must be 0 or more, not {args.threshold:g}")
 
 
-@contextlib.contextmanager
-def said_and_kept():
-    """The warnings raised in the block, each said once as usual when it ends (in order) and
-    kept, as text, in the list yielded — for report.json's ``warnings``."""
-    import warnings
-
-    kept: list[str] = []
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
-        yield kept
-    for w in caught:
-        if str(w.message) not in kept:
-            kept.append(str(w.message))
-            warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
-
-
 def compile_scene(file, output, args, progress=None) -> tuple[dict, dict]:
     """Compile the doodle ``file`` into the folder ``output`` with the options ``args``:
     every file of the output written together at the end (or none). Returns the report
@@ -126,10 +109,9 @@ def compile_scene(file, output, args, progress=None) -> tuple[dict, dict]:
         from laban.models import load as load_effort_model
 
         effort_model = load_effort_model(args.effort_model)
-    with said_and_kept() as said:
-        results = compile_doodle(doodle, args.library, not args.no_builtin, params, args.fps, args.scale,
-                                 args.threshold, not args.no_foot_pinning, terrain, args.jump_arc, args.retime,
-                                 qualities, args.style, effort_model, progress, cache=not args.no_cache)
+    results = compile_doodle(doodle, args.library, not args.no_builtin, params, args.fps, args.scale, args.threshold,
+                             not args.no_foot_pinning, terrain, args.jump_arc, args.retime, qualities, args.style,
+                             effort_model, progress, cache=not args.no_cache)
     if args.edits:
         check_edits(args.edits, qualities, {r.track: len(r.segments) for r in results})
     paths = {r.track: out / f"{r.track}.bvh" for r in results}
@@ -139,7 +121,6 @@ def compile_scene(file, output, args, progress=None) -> tuple[dict, dict]:
     metrics = {r.track: quality(r, worlds[r.track]) for r in results}
     del worlds
     report = compiled_report(file, args.fps, args.terrain, results, paths, metrics, checks)
-    report["warnings"] = said
     with atomic_files() as staged:  # every file of the output replaced at the end, or none
         for r in results:
             write_bvh(staged(paths[r.track]), r.motion)
