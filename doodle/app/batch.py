@@ -278,6 +278,7 @@ def run(jobs: list[Job], work: Callable, options, workers: int, scheduler: str |
 # --- what is printed ------------------------------------------------------------------------
 
 def _check(r: Row) -> str:
+    """A row's animation check as the table shows it."""
     if r.status != "ok":
         return "-"
     return f"FAILS {','.join(r.failing)}" if r.failing else "passes"
