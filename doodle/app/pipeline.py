@@ -358,9 +358,10 @@ def sequenced(track, segments, choices, times, skeleton, rest, scale, terrain, o
                                                          known)
     pieces = _transition_points(pieces, points)
     limits = [speed_limit(pc, _jump_travel(pc.span, track, scale)) for pc in pieces]
-    pieces = make_room(pieces, track.t, limits, [c.clip.stages for c in choices])
-    for pc, limit in zip(pieces, limits):  # what no room could be found for: played faster than a person can
-        if pc.cycles == 0 and pc.progress is None and pc.gesture is None:
+    before, pieces = pieces, make_room(pieces, track.t, limits, [c.clip.stages for c in choices])
+    for pc, was, limit in zip(pieces, before, limits):  # what no room could be found for: played faster
+        if pc is not was and pc.cycles == 0 and pc.progress is None and pc.gesture is None:  # (a piece that
+            # fitted is left as it was: its need is not worked out again)
             need, given = shortest(pc.motion, pc.clip_in, pc.clip_out, limit, flight_times(pc)), pc.span.t1 - pc.span.t0
             if need > given + SQUEEZE_SAID:
                 warnings.warn(f"{track.name} {pc.span.t0 - track.t[0]:.2f}–{pc.span.t1 - track.t[0]:.2f} s: "
