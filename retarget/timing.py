@@ -113,13 +113,40 @@ def in_flight(piece):
     """A jump's span with its travel (``execution``) over the clip's flight — from the
     frame both feet leave the ground to the frame one lands — as fractions of the range of
     the clip it plays, so the root travels while the body is in the air and stands still
-    on the ground before and after."""
+    on the ground before and after; and (``ramps``) the push-off before the flight and the
+    landing after it (:func:`crouches`), over which it gathers and sheds its speed."""
     times = flight_times(piece)
     if times is None:
         return piece.span
+    low = crouches(piece, times)
     if piece.pace is not None:  # retimed unevenly: the span's fractions at those clip times
         u, clip_times = piece.pace
-        return replace(piece.span, execution=tuple(float(np.interp(x, clip_times, u)) for x in times))
-    end = (piece.motion.frames - 1) * piece.motion.frame_time if piece.clip_out is None else piece.clip_out
-    length = max(end - piece.clip_in, 1e-9)
-    return replace(piece.span, execution=tuple((x - piece.clip_in) / length for x in times))
+        a, b, c, d = (float(np.interp(x, clip_times, u)) for x in (low[0], *times, low[1]))
+    else:
+        end = (piece.motion.frames - 1) * piece.motion.frame_time if piece.clip_out is None else piece.clip_out
+        length = max(end - piece.clip_in, 1e-9)
+        a, b, c, d = ((x - piece.clip_in) / length for x in (low[0], *times, low[1]))
+    return replace(piece.span, execution=(b, c), ramps=(max(b - a, 0.0), max(d - c, 0.0)))
+
+
+def crouches(piece, times: tuple[float, float]) -> tuple[float, float]:
+    """Clip seconds where a jump with its flight at ``times`` (:func:`flight_times`) starts
+    to push off and where its landing ends: the bottom of the crouch the pelvis springs up
+    from before the take-off, and of the crouch that absorbs the landing after it — each the
+    nearest low of the pelvis, within the range of the clip that plays. The feet push the
+    body along the ground from the one and brake it until the other."""
+    from retarget.analysis import pelvis_of
+    from retarget.skeleton import forward_kinematics
+
+    motion = piece.motion
+    ft = motion.frame_time
+    height = forward_kinematics(motion)[0][:, pelvis_of(motion.skeleton), 1]
+    first = int(np.ceil(piece.clip_in / ft - 1e-9))
+    last = motion.frames - 1 if piece.clip_out is None else int(np.floor(piece.clip_out / ft + 1e-9))
+    lo = int(np.clip(np.ceil(times[0] / ft), first, last))
+    while lo > first and height[lo - 1] < height[lo]:
+        lo -= 1
+    hi = int(np.clip(np.floor(times[1] / ft), first, last))
+    while hi < last and height[hi + 1] < height[hi]:
+        hi += 1
+    return min(lo * ft, times[0]), max(hi * ft, times[1])

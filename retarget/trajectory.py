@@ -10,7 +10,9 @@ For each action segment, in order:
    the displacement that was removed, so the path stays continuous (§5.2);
 4. a jumping action's horizontal travel is retimed to its execution stage: the root waits
    at the take-off point during preparation and anticipation and rests at the landing
-   point during follow-through and transition (§5.2 "Retiming Jump trajectory");
+   point during follow-through and transition (§5.2 "Retiming Jump trajectory"); it
+   gathers its speed over the ground during the push-off before the flight and sheds it
+   during the landing after (:func:`travel_share`), never starting or stopping in the air;
 5. the heading follows the path's direction while the character travels — turned by the
    clip's own direction of travel, so a side-step moves sideways and a walk back backwards
    — and is held while it acts in place;
@@ -49,6 +51,9 @@ class Span:
     travel_yaw: float = 0.0  # direction the clip travels, relative to where it faces (radians
     # about +y): 0 walking forward, π/2 side-stepping left, π walking back
     most_speed: float = np.inf  # m/s: the fastest the character travels here (:func:`limited`)
+    ramps: tuple[float, float] = (0.0, 0.0)  # a jump: how long (fractions of the span) before
+    # its flight it gathers its speed over the ground (the push-off) and after it sheds it
+    # (the landing) — :func:`travel_share`
 
 
 JUMP_ALPHA = 2.5
@@ -126,8 +131,7 @@ def world_path(t: np.ndarray, p: np.ndarray, spans: list[Span], scale: float,
         path[:, 1] = terrain.height(path[:, [0, 2]])
         for s in spans:  # in the air the body does not follow the ground's bumps: from take-off to landing height
             if s.jumping and s.i1 - s.i0 > 1:
-                u = (t[s.i0:s.i1] - t[s.i0]) / max(t[s.i1 - 1] - t[s.i0], 1e-9)
-                w = np.clip((u - s.execution[0]) / max(s.execution[1] - s.execution[0], 1e-6), 0.0, 1.0)
+                w = travel_share((t[s.i0:s.i1] - t[s.i0]) / max(t[s.i1 - 1] - t[s.i0], 1e-9), s)
                 path[s.i0:s.i1, 1] = path[s.i0, 1] + w * (path[s.i1 - 1, 1] - path[s.i0, 1])
     if jump_arc not in ("clip", "hermite", "apex"):
         raise ValueError(f"jump_arc must be clip, hermite or apex, not {jump_arc!r}")
@@ -210,15 +214,13 @@ def _arc_lift(t: np.ndarray, points: np.ndarray, doodle: np.ndarray, span: Span,
 
 
 def _retimed_jump(t: np.ndarray, points: np.ndarray, span: Span) -> np.ndarray:
-    """Travel only during execution (the flight), from where the segment takes off to
-    where it lands: in a straight line at an even speed, as a body in the air moves,
-    whatever the hand's own pace and wobble on the way — and no farther than
-    :func:`jump_reach` over the ground."""
+    """Travel from where the segment takes off to where it lands, over the flight and the
+    push-off and landing around it (:func:`travel_share`): in a straight line, at an even
+    speed in the air, as a body in the air moves, whatever the hand's own pace and wobble on
+    the way — and no farther than :func:`jump_reach` over the ground."""
     if len(t) < 2:
         return points
-    u = (t - t[0]) / max(t[-1] - t[0], 1e-9)
-    a, b = span.execution
-    w = np.clip((u - a) / max(b - a, 1e-6), 0.0, 1.0)
+    w = travel_share((t - t[0]) / max(t[-1] - t[0], 1e-9), span)
     leap = points[-1] - points[0]
     far, most = float(np.hypot(leap[0], leap[2])), jump_reach(t, span)
     if far > most:
@@ -226,11 +228,35 @@ def _retimed_jump(t: np.ndarray, points: np.ndarray, span: Span) -> np.ndarray:
     return points[0] + np.outer(w, leap)
 
 
-def jump_reach(t: np.ndarray, span: Span) -> float:
-    """How far (m) a jumping span's flight — its execution stage, over the samples' times
-    ``t`` — carries the character at most: :data:`JUMP_SPEED_MOST` for as long as it lasts."""
+def _ramps(span: Span) -> tuple[float, float, float, float]:
+    """The jump's flight ``a, b`` and its push-off and landing ``r0, r1`` (fractions of the
+    span), the ramps kept inside the span."""
     a, b = span.execution
-    return JUMP_SPEED_MOST * max(float(t[-1] - t[0]) * (b - a), 0.0)
+    b = max(b, a)
+    return a, b, float(np.clip(span.ramps[0], 0.0, a)), float(np.clip(span.ramps[1], 0.0, 1.0 - b))
+
+
+def travel_share(u: np.ndarray, span: Span) -> np.ndarray:
+    """The share (0 → 1) of a jump's travel over the ground covered at each fraction ``u`` of
+    its span: at an even speed through the flight (``span.execution``: a body in the air
+    keeps its horizontal speed), that speed gathered at an even rate over the push-off before
+    it and shed over the landing after it (``span.ramps``: the feet push the body along, then
+    brake it) — so the character neither starts nor stops moving while in the air, nor in one
+    frame at touch-down. With no ramps, an even speed over the flight alone."""
+    a, b, r0, r1 = _ramps(span)
+    x = np.clip(np.asarray(u, dtype=float), a - r0, b + r1)
+    covered = np.where(x < a, (x - a + r0) ** 2 / (2 * max(r0, 1e-12)), 0.5 * r0 + np.minimum(x, b) - a)
+    after = np.maximum(x - b, 0.0)
+    covered = covered + np.where(after > 0, after - after**2 / (2 * max(r1, 1e-12)), 0.0)
+    return np.clip(covered / max(b - a + 0.5 * (r0 + r1), 1e-6), 0.0, 1.0)
+
+
+def jump_reach(t: np.ndarray, span: Span) -> float:
+    """How far (m) a jumping span — its flight at :data:`JUMP_SPEED_MOST`, over the samples'
+    times ``t``, and that speed gathered and shed over its push-off and landing
+    (:func:`travel_share`) — carries the character at most."""
+    a, b, r0, r1 = _ramps(span)
+    return JUMP_SPEED_MOST * max(float(t[-1] - t[0]) * (b - a + 0.5 * (r0 + r1)), 0.0)
 
 
 TURNING_SPEED = 0.3  # m/s: slower drift of the path (a hand at rest) does not turn the character

@@ -380,6 +380,24 @@ def test_a_jump_travels_in_a_straight_line_at_an_even_speed_in_the_air():
     assert np.abs(off).max() < 1e-9  # straight
 
 
+def test_the_main_example_jump_neither_starts_nor_stops_moving_in_one_frame():
+    """The main example's Jump travels 0.7 m: its root stood still until the feet left the
+    floor, went at 1.35 m/s through the air, and stopped dead within two frames as they came
+    down (the landing crouch sank straight down). Now the push-off gathers the speed and the
+    landing sheds it: the root's speed over the ground changes by under 0.3 m/s a frame (9
+    m/s², under 1 g)."""
+    from retarget.skeleton import forward_kinematics
+
+    results, _ = _checked(load(DEMO))
+    r = results[0]
+    k = next(i for i, s in enumerate(r.segments) if s.action == "Jump")
+    f0, f1 = r.frame_ranges[k]
+    pos = forward_kinematics(r.motion)[0]
+    ground = np.linalg.norm(np.diff(pos[f0:f1 + 1, 0][:, [0, 2]], axis=0), axis=1) * r.motion.fps
+    assert ground.max() > 0.5  # it travels
+    assert np.abs(np.diff(ground)).max() < 0.3
+
+
 def test_strides_lengthen_with_speed_within_range():
     from retarget.sequence import STRIDE_RANGE, stride_scale, travel_curve
 

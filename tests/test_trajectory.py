@@ -8,7 +8,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from retarget.terrain import parse_terrain
-from retarget.trajectory import JUMP_SPEED_MOST, Span, hermite_arc, limited, overspeed, world_path
+from retarget.trajectory import JUMP_SPEED_MOST, Span, hermite_arc, jump_reach, limited, overspeed, travel_share, world_path
 
 
 def test_hermite_arc_is_vertical_at_both_ends_with_the_thesis_apex():
@@ -138,3 +138,33 @@ def test_a_jump_farther_than_its_flight_can_carry_lands_short_the_way_it_jumped(
     assert np.allclose(path[180], path[179], rtol=0, atol=1e-12)  # the walk after it starts where it landed
     (span, far, most, short), = overspeed(t, p, spans, 10.0)
     assert span.action == "Jump" and most == pytest.approx(reach) and short == pytest.approx(far - reach)
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.floats(0.05, 0.6), st.floats(0.05, 0.4), st.floats(0.0, 0.3), st.floats(0.0, 0.3))
+def test_a_jump_gathers_its_speed_on_the_ground_and_keeps_it_in_the_air(a, flight, r0, r1):
+    """The share of a jump's travel: none before its push-off, all after its landing, an even
+    speed through the flight, gathered and shed at an even rate either side — the speed never
+    stepping (the character stopped in one frame at touch-down)."""
+    b = min(a + flight, 0.95)
+    span = Span("Jump", 0.0, 1.0, 0, 2, False, True, False, (a, b), ramps=(r0, r1))
+    r0, r1 = min(r0, a), min(r1, 1.0 - b)
+    u = np.linspace(0.0, 1.0, 20001)
+    w = travel_share(u, span)
+    assert w[0] < 1e-12 and w[-1] == pytest.approx(1.0) and np.all(np.diff(w) >= -1e-12)
+    assert np.all(w[u <= a - r0] < 1e-12) and np.allclose(w[u >= b + r1], 1.0)
+    speed = np.diff(w) / np.diff(u)
+    top = 1.0 / (b - a + 0.5 * (r0 + r1))
+    inside = (u[1:] > a + 1e-3) & (u[:-1] < b - 1e-3)
+    assert np.allclose(speed[inside], top, rtol=1e-3)  # even in the air
+    assert speed.max() <= top * (1 + 1e-3)
+    assert np.abs(np.diff(speed)).max() <= top * (np.diff(u)[0] / max(min(r0 or 1, r1 or 1), 1e-3) + 1e-3) \
+        if r0 > 0.01 and r1 > 0.01 else True  # no step: changes at most at the ramps' even rate
+    t = np.linspace(0.0, 2.0, 5)
+    assert jump_reach(t, span) == pytest.approx(JUMP_SPEED_MOST * 2.0 / top)  # the flight no faster than the most
+
+
+def test_without_ramps_a_jump_travels_over_its_flight_alone():
+    span = Span("Jump", 0.0, 1.0, 0, 2, False, True, False, (0.3, 0.7))
+    u = np.linspace(0.0, 1.0, 101)
+    np.testing.assert_allclose(travel_share(u, span), np.clip((u - 0.3) / 0.4, 0.0, 1.0), atol=1e-12)
