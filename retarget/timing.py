@@ -134,13 +134,11 @@ def crouches(piece, times: tuple[float, float]) -> tuple[float, float]:
     to push off and where its landing ends: the bottom of the crouch the pelvis springs up
     from before the take-off, and of the crouch that absorbs the landing after it — each the
     nearest low of the pelvis, within the range of the clip that plays. The feet push the
-    body along the ground from the one and brake it until the other."""
-    from retarget.analysis import pelvis_of
-    from retarget.skeleton import forward_kinematics
-
+    body along the ground from the one and brake it until the other. The pelvis's height is its
+    own translation, as the sequenced clip places it (``retarget.sequence.pose_at``)."""
     motion = piece.motion
     ft = motion.frame_time
-    height = forward_kinematics(motion)[0][:, pelvis_of(motion.skeleton), 1]
+    height = motion.translations[:, piece.pelvis, 1]
     first = int(np.ceil(piece.clip_in / ft - 1e-9))
     last = motion.frames - 1 if piece.clip_out is None else int(np.floor(piece.clip_out / ft + 1e-9))
     lo = int(np.clip(np.ceil(times[0] / ft), first, last))
