@@ -110,14 +110,16 @@ def flight(contacts: np.ndarray) -> np.ndarray:
 
 
 def in_flight(piece):
-    """A jump's span with its travel (``execution``) over the clip's flight — from the
+    """A jump with its travel (``execution`` of its span) over the clip's flight — from the
     frame both feet leave the ground to the frame one lands — as fractions of the range of
     the clip it plays, so the root travels while the body is in the air and stands still
-    on the ground before and after; and (``ramps``) the push-off before the flight and the
-    landing after it (:func:`crouches`), over which it gathers and sheds its speed."""
-    times = flight_times(piece)
+    on the ground before and after; (``ramps``) the push-off before the flight and the
+    landing after it (:func:`crouches`), over which it gathers and sheds its speed; and its
+    feet standing only where the body does not move under them (:func:`push_off_contacts`).
+    Other pieces as they are."""
+    times = flight_times(piece) if piece.span.jumping else None
     if times is None:
-        return piece.span
+        return piece
     low = crouches(piece, times)
     if piece.pace is not None:  # retimed unevenly: the span's fractions at those clip times
         u, clip_times = piece.pace
@@ -126,7 +128,30 @@ def in_flight(piece):
         end = (piece.motion.frames - 1) * piece.motion.frame_time if piece.clip_out is None else piece.clip_out
         length = max(end - piece.clip_in, 1e-9)
         a, b, c, d = ((x - piece.clip_in) / length for x in (low[0], *times, low[1]))
-    return replace(piece.span, execution=(b, c), ramps=(max(b - a, 0.0), max(d - c, 0.0)))
+    span = replace(piece.span, execution=(b, c), ramps=(max(b - a, 0.0), max(d - c, 0.0)))
+    return replace(piece, span=span, contacts=push_off_contacts(piece.contacts, piece.motion.frame_time, times, low))
+
+
+def push_off_contacts(contacts: np.ndarray, frame_time: float, times: tuple[float, float],
+                      low: tuple[float, float]) -> np.ndarray:
+    """A jump's contacts (clip frames, feet) with its flight at ``times`` and the bottoms of
+    its crouches at ``low`` (clip seconds, :func:`crouches`), less every touch between a
+    crouch and the flight that is not part of the stance at the crouch: over the push-off
+    and the landing the body gathers and sheds its speed along the ground, and a foot read
+    on the floor there for a moment — a toe brushing it as the heel rises or comes down,
+    the foot's own speed dipping for a frame — would be held at one spot while the body
+    moves on, and snap back after. The stance the body springs from, and the one it lands
+    into, keep their frames."""
+    out = contacts.copy()
+    last = len(out) - 1
+    a, b = (int(np.clip(np.rint(x / frame_time), 0, last)) for x in low)
+    take_off = int(np.clip(np.ceil(times[0] / frame_time - 1e-9), 0, last))
+    landing = int(np.clip(np.floor(times[1] / frame_time + 1e-9), 0, last))
+    for k in range(out.shape[1]):
+        for lo, hi in _intervals(out[:, k]):  # [lo, hi) runs of standing
+            if a < lo and hi <= take_off or landing <= lo and hi - 1 < b:
+                out[lo:hi, k] = False
+    return out
 
 
 def crouches(piece, times: tuple[float, float]) -> tuple[float, float]:

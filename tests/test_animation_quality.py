@@ -398,6 +398,38 @@ def test_the_main_example_jump_neither_starts_nor_stops_moving_in_one_frame():
     assert np.abs(np.diff(ground)).max() < 0.3
 
 
+def test_a_fast_jump_holds_no_foot_still_for_a_moment_while_it_lands():
+    """Asked to jump at 8.6 m/s (the main example at ``--scale 80``, styled by the effort model), the built-in Jump's
+    landing held a foot at one spot for the single frame the clip reads its toes on the floor
+    as they come down (clip frame 40; 6 frames before the crouch's stance), while the body
+    shed its speed over the ground: the foot snapped back at 17 m/s, a pop. A touch between a
+    crouch and the flight is not a stance: the body moves over it."""
+    _, checks = _checked(load(DEMO), scale=80.0, effort_model=_effort())  # as `doodle compile` does
+    assert checks["c0"].passes, checks["c0"].summary()
+
+
+def test_only_the_stances_at_a_jumps_crouches_hold_its_feet():
+    """The built-in Jump's own contacts read each foot on the floor for one frame just before
+    its take-off and at its landing (the toes brush it while the ankle slows); the stance it
+    springs from and the one it lands into keep every frame."""
+    from retarget.timing import flight, push_off_contacts
+
+    jump = _clip("Jump")
+    contacts, ft = jump.contacts, jump.motion.frame_time
+    air = flight(contacts)
+    times = ((air[0] - 0.5) * ft, (air[-1] + 0.5) * ft)
+    height = jump.motion.translations[:, jump.roles["pelvis"], 1]
+    low = (int(np.argmin(height[:air[0]])) * ft, (air[-1] + int(np.argmin(height[air[-1]:]))) * ft)
+    kept = push_off_contacts(contacts, ft, times, low)
+    dropped = contacts & ~kept
+    assert dropped.any(axis=1).sum() == 2  # the two one-frame touches, on both feet
+    for f in np.flatnonzero(dropped.any(axis=1)):
+        assert low[0] / ft < f < air[0] or air[-1] < f < low[1] / ft
+    assert (kept <= contacts).all()
+    stance = lambda c, at: c[int(round(at / ft))].all()  # noqa: E731
+    assert stance(kept, low[0]) and stance(kept, low[1])
+
+
 def test_strides_lengthen_with_speed_within_range():
     from retarget.sequence import STRIDE_RANGE, stride_scale, travel_curve
 

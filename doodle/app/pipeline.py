@@ -372,7 +372,7 @@ def sequenced(track, segments, choices, times, skeleton, rest, scale, terrain, o
                                      flight_times(pc), None if pc.contacts is None else ~pc.contacts.all(axis=1)))
               if pc.cycles == 0 and pc.progress is None and pc.gesture is None else pc
               for pc, limit in zip(pieces, limits)]
-    pieces = [replace(pc, span=in_flight(pc)) if pc.span.jumping else pc for pc in pieces]
+    pieces = [in_flight(pc) for pc in pieces]
     spans = [pc.span for pc in pieces]
     front = quat.rotate(track.q[:1], np.array([[0.0, 0.0, 1.0]]))[0]  # the figurine's front at the start
     path, heading = world_path(track.t, track.p, spans, scale, terrain, jump_arc, origin,
