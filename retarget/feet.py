@@ -163,7 +163,7 @@ LOWEST = 0.2  # m: the most the pelvis is lowered for a foot on lower ground (a 
 
 def pin_feet(motion: Motion, feet: list[int], fade: int = 3, terrain=None, contacts: np.ndarray | None = None,
              standing: list[float] | None = None, sole: float = 0.0, ground_y: np.ndarray | None = None,
-             in_place: bool = False) -> Motion:
+             in_place: bool = False, rolls: np.ndarray | None = None) -> Motion:
     """The motion with each foot held still over each of its contact intervals.
 
     ``contacts`` (F, len(feet)): where the foot stands — the sequenced clips' own contacts
@@ -179,7 +179,10 @@ def pin_feet(motion: Motion, feet: list[int], fade: int = 3, terrain=None, conta
     where a leg cannot reach its spot the pelvis is lowered: its height comes from the
     ground under the feet, not under the root (``ground_y``, per frame: the ground the root
     was put on). Pins fade in and out over ``fade`` frames. ``in_place``: ``motion``'s own
-    arrays are changed rather than copied (a motion nothing else holds: just sequenced)."""
+    arrays are changed rather than copied (a motion nothing else holds: just sequenced).
+    ``rolls`` (F, len(feet)): where a foot turns on its toes in place (a jump's push-off and
+    landing, :func:`retarget.sequence.roll_states`): held where it is over the ground with
+    the stance next to it, its height (a rising or falling heel) left to the clips."""
     legs = {0}  # the joints read here: root, each foot's subtree (toes, end sites), knee, hip and pelvis
     for a in feet:
         legs.update(motion.skeleton.subtree(a))
@@ -197,21 +200,23 @@ def pin_feet(motion: Motion, feet: list[int], fade: int = 3, terrain=None, conta
     clears = [_clearance(motion, original_world, a, terrain) - sole for a in feet]  # the soles as the clips put them
     original = original_world[0]
     del original_world  # the rotations are not needed again (``original`` is let go below)
+    rolls = np.zeros_like(contacts) if rolls is None else rolls & ~contacts
     rise = None
     if terrain is not None:  # the ground under each foot relative to the ground under the root,
         # but not in the air (both feet off: the feet go with the body)
         under_root = terrain.height(original[:, 0][:, [0, 2]]) if ground_y is None else ground_y
-        aloft = ~contacts.any(axis=1)
+        aloft = ~(contacts | rolls).any(axis=1)
         rise = [np.where(aloft, 0.0, terrain.height(original[:, a][:, [0, 2]]) - under_root) for a in feet]
         rise = [gaussian_filter1d(r, 1.0, mode="nearest") for r in rise]  # eased into and out of a flight
-    in_air = _aloft(original, feet, contacts, terrain, standing)  # the body, not only the feet
+    in_air = _aloft(original, feet, contacts | rolls, terrain, standing)  # the body, not only the feet
     targets, weights, helds = [], [], []
     for k, ankle in enumerate(feet):
         hip, _, leg = leg_of(motion.skeleton, ankle)
         target, weight, held = _pins(original[:, ankle], contacts[:, k], fade, terrain,
                                      None if standing is None else standing[k], None if rise is None else rise[k],
                                      motion.fps, aloft=in_air, clear=clears[k],
-                                     hip=original[:, hip] if hip >= 0 else None, leg=leg)
+                                     hip=original[:, hip] if hip >= 0 else None, leg=leg, roll=rolls[:, k],
+                                     toe=_toe(motion.skeleton, original, ankle))
         targets.append(target)
         weights.append(weight)
         helds.append(held)
@@ -326,7 +331,8 @@ STEP_APEX = (0.04, 0.10)  # m: the apex of a given step, half its length, within
 
 def _pins(ankle: np.ndarray, contact: np.ndarray, fade: int, terrain, standing: float | None,
           rise: np.ndarray | None = None, fps: float = 30.0, aloft: np.ndarray | None = None,
-          clear: np.ndarray | None = None, hip: np.ndarray | None = None, leg: float = np.inf):
+          clear: np.ndarray | None = None, hip: np.ndarray | None = None, leg: float = np.inf,
+          roll: np.ndarray | None = None, toe: np.ndarray | None = None):
     """One foot's targets (F, 3), weights (F,) and standing weights (F,): held at its landing
     spot over each contact interval (a new spot once the body has left it more than
     :data:`REACH` behind, or once its ``hip`` (F, 3) stays farther from it than the ``leg``
@@ -350,14 +356,21 @@ def _pins(ankle: np.ndarray, contact: np.ndarray, fade: int, terrain, standing: 
     as the foot lands out of a flight (``aloft``) lowers it no more than that (a toes-first
     landing pulled down to the standing height put its toes through the floor, and the body
     lifted out of it over the frames around left the landing feet hovering: a back flip's
-    flight a frame longer than any real one)."""
+    flight a frame longer than any real one). ``roll`` (F,): frames the foot turns on its toes
+    beside a stance: held with it over the ground, at the height the clips give it (not a
+    standing foot) — by its toes (``toe``, (F, 3): where the clips put the toe joint), so that
+    the heel rises or comes down about them."""
     frames = len(ankle)
     follow = ankle.copy()
     if rise is not None:
         follow[:, 1] += rise
     height = ankle[:, 1] - _ground(terrain, ankle[:, [0, 2]]) + (0.0 if rise is None else rise)
+    roll = np.zeros(frames, dtype=bool) if roll is None else roll.copy()
+    for a, b in _intervals(roll):  # the body travelling farther than a foot is held behind it: the feet go with it
+        if np.linalg.norm(ankle[a:b, [0, 2]] - ankle[a, [0, 2]], axis=1).max() > REACH:
+            roll[a:b] = False
     pins = []  # [first, stop, spot (3,)]
-    for s, e in _intervals(contact):
+    for s, e in _intervals(contact | roll):
         while s < e:
             spot = ankle[s, [0, 2]]
             away = np.linalg.norm(ankle[s:e, [0, 2]] - spot, axis=1) > REACH
@@ -403,6 +416,10 @@ def _pins(ankle: np.ndarray, contact: np.ndarray, fade: int, terrain, standing: 
     landing = np.zeros(frames, dtype=bool)  # fading in: coming down onto its spot out of a flight
     for s, stop, on in pins:
         pin[s:stop] = on
+        if roll[s:stop].any():  # on its toes: held by them, the heel as the clips have it
+            pin[s:stop, 1] = np.where(roll[s:stop], follow[s:stop, 1], on[1])
+            if toe is not None:
+                pin[s:stop, [0, 2]] = toe[s, [0, 2]] - (toe[s:stop] - ankle[s:stop])[:, [0, 2]]
         held[s:stop] = 1.0
         # held at the spot while fading in and out, over more frames the farther the foot is
         # from where the clips put it (it moves there no faster than a step)
@@ -418,7 +435,7 @@ def _pins(ankle: np.ndarray, contact: np.ndarray, fade: int, terrain, standing: 
                     pin[f] = follow[f] + (pin[edge] - follow[edge]) if aloft is not None and aloft[f] else pin[edge]
                     held[f] = w
                     landing[f] = lands
-    stance = held.copy()
+    stance = np.where(roll, 0.0, held)
     for lo, hi, a, b, length in steps:  # a step in an arc from one spot to the next
         u = (np.arange(lo, hi) - lo + 1) / (hi - lo + 1)
         pin[lo:hi] = a + np.outer(min_jerk(np.clip((u - 0.15) / 0.7, 0.0, 1.0)), b - a)  # up, across, down
@@ -445,6 +462,12 @@ def _pins(ankle: np.ndarray, contact: np.ndarray, fade: int, terrain, standing: 
         target[:, 1] = np.where(fading, np.maximum(target[:, 1], follow[:, 1] - np.maximum(clear, 0.0)), target[:, 1])
     weight = np.ones(frames) if rise is not None else ((held > 0) | sunk).astype(float)
     return target, weight, stance
+
+
+def _toe(skeleton, positions: np.ndarray, ankle: int) -> np.ndarray | None:
+    """(F, 3) where the clips put a foot's toe joint (its first child), None for a foot without one."""
+    below = skeleton.children(ankle)
+    return positions[:, below[0]] if len(below) else None
 
 
 def _fade(gap: float, fade: int, fps: float) -> int:

@@ -45,6 +45,7 @@ class Placed:
     clip_out: float | None = None  # clip time (s) played at its end (None: the clip's end)
     gesture: tuple | None = None  # (times, fraction): gesture-based retiming, §5.3.3
     contacts: np.ndarray | None = None  # (clip frames, feet) bool: where the clip's feet stand
+    rolls: np.ndarray | None = None  # (clip frames, feet) bool: a jump's feet on their toes (:func:`retarget.timing.push_off_rolls`)
     pace: tuple | None = None  # (fraction of the span, clip time): a one-shot's retiming (:func:`paced`)
     phase: float = 0.0  # m of the clip's travel a distance-driven cycle starts at (:func:`entry_phase`)
 
@@ -497,14 +498,25 @@ def contact_states(placed: list[Placed], times: np.ndarray, feet: int = 2, blend
     """(F, feet) bool: where the sequenced clips mean each foot to stand on the ground —
     each clip's own contacts at the clip time it plays, voted with the cross-fade weights of
     :func:`sequence` (``blend`` as it had them; a clip without contacts counts as standing)."""
+    return _voted(placed, times, feet, blend, "contacts", 1.0)
+
+
+def roll_states(placed: list[Placed], times: np.ndarray, feet: int = 2, blend=BLEND) -> np.ndarray:
+    """(F, feet) bool: where the sequenced clips mean a foot to turn on its toes in place (a
+    jump's push-off and landing, ``Placed.rolls``), voted as :func:`contact_states` does."""
+    return _voted(placed, times, feet, blend, "rolls", 0.0)
+
+
+def _voted(placed: list[Placed], times: np.ndarray, feet: int, blend, what: str, missing: float) -> np.ndarray:
     vote = np.zeros((len(times), feet))
     total = np.zeros(len(times))
     for pl, idx, w in _blend_weights(placed, times, blend):
-        if pl.contacts is None or len(pl.contacts) == 0:
-            c = np.ones((len(idx), feet))
+        states = getattr(pl, what)
+        if states is None or len(states) == 0:
+            c = np.full((len(idx), feet), missing)
         else:
             f = np.rint(clip_time(pl, times[idx]) / pl.motion.frame_time).astype(int)
-            c = pl.contacts[np.clip(f, 0, len(pl.contacts) - 1)].astype(float)
+            c = states[np.clip(f, 0, len(states) - 1)].astype(float)
         vote[idx] += c * w[:, None]
         total[idx] += w
     return vote / np.maximum(total, 1e-9)[:, None] >= 0.5

@@ -129,7 +129,26 @@ def in_flight(piece):
         length = max(end - piece.clip_in, 1e-9)
         a, b, c, d = ((x - piece.clip_in) / length for x in (low[0], *times, low[1]))
     span = replace(piece.span, execution=(b, c), ramps=(max(b - a, 0.0), max(d - c, 0.0)))
-    return replace(piece, span=span, contacts=push_off_contacts(piece.contacts, piece.motion.frame_time, times, low))
+    contacts = push_off_contacts(piece.contacts, piece.motion.frame_time, times, low)
+    return replace(piece, span=span, contacts=contacts,
+                   rolls=push_off_rolls(contacts, piece.motion.frame_time, times, low))
+
+
+def push_off_rolls(contacts: np.ndarray, frame_time: float, times: tuple[float, float],
+                   low: tuple[float, float]) -> np.ndarray:
+    """(clip frames, feet) bool: where a jump's foot turns on its toes without standing — from
+    the stance at the crouch it springs from to the take-off, and from the landing to the
+    stance at the crouch that absorbs it (``contacts`` as :func:`push_off_contacts` left them,
+    flight ``times`` and crouches ``low`` in clip seconds). The body gathers or sheds its speed
+    over the ground there; the toes stay where they are."""
+    last = len(contacts) - 1
+    a, b = (int(np.clip(np.rint(x / frame_time), 0, last)) for x in low)
+    first_air = int(np.clip(np.ceil(times[0] / frame_time - 1e-9), 0, last))
+    last_air = int(np.clip(np.floor(times[1] / frame_time + 1e-9), 0, last))
+    window = np.zeros(len(contacts), dtype=bool)
+    window[a:first_air] = True
+    window[last_air + 1:b + 1] = True
+    return window[:, None] & ~contacts
 
 
 def push_off_contacts(contacts: np.ndarray, frame_time: float, times: tuple[float, float],

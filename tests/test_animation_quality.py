@@ -411,8 +411,9 @@ def test_a_fast_jump_holds_no_foot_still_for_a_moment_while_it_lands():
 def test_only_the_stances_at_a_jumps_crouches_hold_its_feet():
     """The built-in Jump's own contacts read each foot on the floor for one frame just before
     its take-off and at its landing (the toes brush it while the ankle slows); the stance it
-    springs from and the one it lands into keep every frame."""
-    from retarget.timing import flight, push_off_contacts
+    springs from and the one it lands into keep every frame, and every frame between them and
+    the flight has the foot turning on its toes."""
+    from retarget.timing import flight, push_off_contacts, push_off_rolls
 
     jump = _clip("Jump")
     contacts, ft = jump.contacts, jump.motion.frame_time
@@ -428,6 +429,39 @@ def test_only_the_stances_at_a_jumps_crouches_hold_its_feet():
     assert (kept <= contacts).all()
     stance = lambda c, at: c[int(round(at / ft))].all()  # noqa: E731
     assert stance(kept, low[0]) and stance(kept, low[1])
+    # between the stances and the flight the feet turn on their toes: every frame, on both feet
+    rolls = push_off_rolls(kept, ft, times, low)
+    assert not (rolls & kept).any() and not rolls[air].any()
+    between = np.zeros(len(kept), bool)
+    between[int(round(low[0] / ft)):air[0]] = True
+    between[air[-1] + 1:int(round(low[1] / ft)) + 1] = True
+    assert ((rolls | kept)[between]).all()
+
+
+def test_a_jumps_toes_stay_put_while_the_body_moves_over_them():
+    """The main example's Jump gathers its speed over the ground during the push-off and sheds
+    it during the landing; its toes skated along the floor meanwhile (toe joints on the floor
+    moving at up to 1.0 m/s at the take-off, 0.6 at the landing: the feet went with the body,
+    not held as the heel rose or came down). Now each foot turns on its toes where they are."""
+    from retarget.skeleton import forward_kinematics
+
+    results, _ = _checked(load(DEMO))
+    r = results[0]
+    k = next(i for i, s in enumerate(r.segments) if s.action == "Jump")
+    f0, f1 = r.frame_ranges[k]
+    pos = forward_kinematics(r.motion)[0]
+    names = r.motion.skeleton.names
+    root = np.linalg.norm(np.diff(pos[f0:f1 + 1, 0][:, [0, 2]], axis=0), axis=1) * r.motion.fps
+    checked = 0
+    for toe in (names.index("LeftToeBase"), names.index("RightToeBase")):
+        y = pos[f0:f1 + 1, toe, 1]
+        speed = np.linalg.norm(np.diff(pos[f0:f1 + 1, toe][:, [0, 2]], axis=0), axis=1) * r.motion.fps
+        floor = y <= y.min() + 0.03
+        # on the floor the frame before as well (not the step a landing foot comes down in), the body moving
+        down = floor[1:] & floor[:-1] & np.concatenate([[False], floor[:-2]]) & (root > 0.1)
+        checked += int(down.sum())
+        assert speed[down].max() < 0.25, speed[down]
+    assert checked >= 8  # the push-off's and the landing's frames are looked at
 
 
 def test_strides_lengthen_with_speed_within_range():

@@ -335,7 +335,7 @@ def sequenced(track, segments, choices, times, skeleton, rest, scale, terrain, o
     """One track's chosen clips laid on its path and sequenced on the timeline, with what
     :func:`finish` needs (the clips' contacts where ``pin``)."""
     from retarget.sequence import (Placed, blend_lengths, boundary_gaps, contact_states, entry_phase, paced,
-                                   rising_blends, sequence, shortest, stride_scale)
+                                   rising_blends, roll_states, sequence, shortest, stride_scale)
     from retarget.timing import flight_times, in_flight, make_room, speed_limit
     from retarget.trajectory import overspeed, world_path
 
@@ -408,7 +408,8 @@ def sequenced(track, segments, choices, times, skeleton, rest, scale, terrain, o
     used = {seg.action: (c.clip.path if c.on_skeleton else None) for seg, c in zip(segments, choices)}
     return Sequenced(motion, transitions, contact_states(pieces, times, blend=blends) if pin else None, spans,
                      frame_path, used,
-                     [c.style for c in choices], [c.effort for c in choices])
+                     [c.style for c in choices], [c.effort for c in choices],
+                     roll_states(pieces, times, blend=blends) if pin else None)
 
 
 def finish(track, tokens, segments, staged: "Sequenced", times, rest, scale, terrain, origin) -> Animation:
@@ -423,7 +424,7 @@ def finish(track, tokens, segments, staged: "Sequenced", times, rest, scale, ter
     feet = [rest.roles["left_foot"], rest.roles["right_foot"]]
     standing, sole = _standing(rest, feet)
     if staged.contacts is not None:
-        motion = pin_feet(motion, feet, terrain=terrain, contacts=staged.contacts,
+        motion = pin_feet(motion, feet, terrain=terrain, contacts=staged.contacts, rolls=staged.rolls,
                           standing=standing, sole=sole, ground_y=frame_path[:, 1], in_place=True)
     motion = clamp_to_ground(motion, terrain, in_place=True)
     ranges = [(int(np.searchsorted(times, sp.t0)), int(min(np.searchsorted(times, sp.t1), len(times) - 1)))
@@ -447,6 +448,7 @@ class Sequenced:
     clips: dict  # action -> clip path (None: the rest pose)
     styles: list
     efforts: list
+    rolls: np.ndarray | None = None  # (F, feet) where a jump's feet turn on their toes in place
 
 
 def walk_progress(times: np.ndarray, step: np.ndarray, t0: float, t1: float) -> tuple[np.ndarray, np.ndarray]:
