@@ -13,6 +13,7 @@ For each action segment, in order:
    point during follow-through and transition (§5.2 "Retiming Jump trajectory"); it
    gathers its speed over the ground during the push-off before the flight and sheds it
    during the landing after (:func:`travel_share`), never starting or stopping in the air;
+   the next segment starts where it landed (as in step 3);
 5. the heading follows the path's direction while the character travels — turned by the
    clip's own direction of travel, so a side-step moves sideways and a walk back backwards
    — and is held while it acts in place;
@@ -115,11 +116,11 @@ def world_path(t: np.ndarray, p: np.ndarray, spans: list[Span], scale: float,
             path[seg] = path[s.i0]
             offset = path[s.i0] - ground[min(s.i1, len(ground) - 1)]
         elif s.jumping:
-            leap = path[s.i1 - 1] - path[s.i0]
-            short = float(np.hypot(leap[0], leap[2])) > jump_reach(t[seg], s)
             path[seg] = _retimed_jump(t[seg], path[seg], s)
-            if short:  # landed short of the doodle: the rest starts from there (no step between samples)
-                offset = path[s.i1 - 1] - ground[min(s.i1, len(ground) - 1)]
+            # the rest starts where it landed — short of the doodle, or where the doodle came
+            # down a sample before the next segment starts (no step between samples: the hand
+            # moving on, that one sample's step was a one-frame jolt of the root)
+            offset = path[s.i1 - 1] - ground[min(s.i1, len(ground) - 1)]
         else:
             laid = path[seg]
             held = limited(t[seg], laid, s.most_speed)

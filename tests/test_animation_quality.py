@@ -464,6 +464,21 @@ def test_a_jumps_toes_stay_put_while_the_body_moves_over_them():
     assert checked >= 8  # the push-off's and the landing's frames are looked at
 
 
+def test_the_root_stands_still_where_the_character_stands_after_a_jump():
+    """The main example's Idle after its Jump stood where the doodle came down a sample before
+    the Idle's segment starts, not where the jump had carried the root: the root jolted by a
+    few millimetres in one frame as the stand began (0.23 m/s, the body otherwise still)."""
+    from retarget.skeleton import forward_kinematics
+
+    results, _ = _checked(load(DEMO))
+    r = results[0]
+    k = next(i for i, s in enumerate(r.segments) if s.action == "Jump")
+    assert r.segments[k + 1].action == "Idle"
+    f0, f1 = r.frame_ranges[k + 1]
+    root = forward_kinematics(r.motion)[0][:, 0][:, [0, 2]]
+    assert np.linalg.norm(np.diff(root[f0 - 6:f1], axis=0), axis=1).max() < 1e-3
+
+
 def test_strides_lengthen_with_speed_within_range():
     from retarget.sequence import STRIDE_RANGE, stride_scale, travel_curve
 
