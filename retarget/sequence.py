@@ -45,7 +45,7 @@ class Placed:
     clip_out: float | None = None  # clip time (s) played at its end (None: the clip's end)
     gesture: tuple | None = None  # (times, fraction): gesture-based retiming, §5.3.3
     contacts: np.ndarray | None = None  # (clip frames, feet) bool: where the clip's feet stand
-    rolls: np.ndarray | None = None  # (clip frames, feet) bool: a jump's feet on their toes (:func:`retarget.timing.push_off_rolls`)
+    rolls: np.ndarray | None = None  # (clip frames, feet) bool: a jump's feet on their toes (timing.push_off_rolls)
     pace: tuple | None = None  # (fraction of the span, clip time): a one-shot's retiming (:func:`paced`)
     phase: float = 0.0  # m of the clip's travel a distance-driven cycle starts at (:func:`entry_phase`)
 

@@ -114,9 +114,10 @@ def in_flight(piece):
     frame both feet leave the ground to the frame one lands — as fractions of the range of
     the clip it plays, so the root travels while the body is in the air and stands still
     on the ground before and after; (``ramps``) the push-off before the flight and the
-    landing after it (:func:`crouches`), over which it gathers and sheds its speed; and its
-    feet standing only where the body does not move under them (:func:`push_off_contacts`).
-    Other pieces as they are."""
+    landing after it (:func:`crouches`), over which it gathers and sheds its speed; its
+    feet standing only where the body does not move over them (:func:`push_off_contacts`),
+    and turning on their toes where it does (:func:`push_off_rolls`). Other pieces as they
+    are."""
     times = flight_times(piece) if piece.span.jumping else None
     if times is None:
         return piece
@@ -141,10 +142,7 @@ def push_off_rolls(contacts: np.ndarray, frame_time: float, times: tuple[float, 
     stance at the crouch that absorbs it (``contacts`` as :func:`push_off_contacts` left them,
     flight ``times`` and crouches ``low`` in clip seconds). The body gathers or sheds its speed
     over the ground there; the toes stay where they are."""
-    last = len(contacts) - 1
-    a, b = (int(np.clip(np.rint(x / frame_time), 0, last)) for x in low)
-    first_air = int(np.clip(np.ceil(times[0] / frame_time - 1e-9), 0, last))
-    last_air = int(np.clip(np.floor(times[1] / frame_time + 1e-9), 0, last))
+    a, b, first_air, last_air = _push_off_frames(len(contacts), frame_time, times, low)
     window = np.zeros(len(contacts), dtype=bool)
     window[a:first_air] = True
     window[last_air + 1:b + 1] = True
@@ -162,15 +160,23 @@ def push_off_contacts(contacts: np.ndarray, frame_time: float, times: tuple[floa
     moves on, and snap back after. The stance the body springs from, and the one it lands
     into, keep their frames."""
     out = contacts.copy()
-    last = len(out) - 1
-    a, b = (int(np.clip(np.rint(x / frame_time), 0, last)) for x in low)
-    take_off = int(np.clip(np.ceil(times[0] / frame_time - 1e-9), 0, last))
-    landing = int(np.clip(np.floor(times[1] / frame_time + 1e-9), 0, last))
+    a, b, take_off, last_air = _push_off_frames(len(out), frame_time, times, low)
     for k in range(out.shape[1]):
         for lo, hi in _intervals(out[:, k]):  # [lo, hi) runs of standing
-            if a < lo and hi <= take_off or landing <= lo and hi - 1 < b:
+            if a < lo and hi <= take_off or last_air <= lo and hi - 1 < b:
                 out[lo:hi, k] = False
     return out
+
+
+def _push_off_frames(frames: int, frame_time: float, times: tuple[float, float],
+                     low: tuple[float, float]) -> tuple[int, int, int, int]:
+    """Clip frames of a jump's crouches (``low``, s) and of its flight's first and last
+    frames (``times``, s, half a frame outside them: :func:`flight_times`)."""
+    last = frames - 1
+    a, b = (int(np.clip(np.rint(x / frame_time), 0, last)) for x in low)
+    first_air = int(np.clip(np.ceil(times[0] / frame_time - 1e-9), 0, last))
+    last_air = int(np.clip(np.floor(times[1] / frame_time + 1e-9), 0, last))
+    return a, b, first_air, last_air
 
 
 def crouches(piece, times: tuple[float, float]) -> tuple[float, float]:
