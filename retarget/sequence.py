@@ -49,6 +49,12 @@ class Placed:
     pace: tuple | None = None  # (fraction of the span, clip time): a one-shot's retiming (:func:`paced`)
     phase: float = 0.0  # m of the clip's travel a distance-driven cycle starts at (:func:`entry_phase`)
 
+    @property
+    def fitted(self) -> bool:
+        """A one-shot clip played to fit its span (:func:`paced`): not a cycle, not driven
+        by the distance walked, not following the hand's own timing."""
+        return self.cycles == 0 and self.progress is None and self.gesture is None
+
 
 def travel_curve(motion: Motion, pelvis: int) -> np.ndarray:
     """Distance (m) the pelvis has travelled at each frame of a cyclic clip, along its net

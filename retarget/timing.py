@@ -52,7 +52,7 @@ def make_room(pieces: list, t: np.ndarray, limits: list, stages: list) -> list:
     than whipping through."""
     pieces = list(pieces)
     for k, pc in enumerate(pieces):
-        if pc.cycles != 0 or pc.progress is not None or pc.gesture is not None:
+        if not pc.fitted:
             continue
         need = 1.1 * shortest(pc.motion, pc.clip_in, pc.clip_out, limits[k], flight_times(pc))
         short = need - (pc.span.t1 - pc.span.t0)

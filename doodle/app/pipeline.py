@@ -360,8 +360,7 @@ def sequenced(track, segments, choices, times, skeleton, rest, scale, terrain, o
     limits = [speed_limit(pc, _jump_travel(pc.span, track, scale)) for pc in pieces]
     before, pieces = pieces, make_room(pieces, track.t, limits, [c.clip.stages for c in choices])
     for pc, was, limit in zip(pieces, before, limits):  # what no room could be found for: played faster
-        if pc is not was and pc.cycles == 0 and pc.progress is None and pc.gesture is None:  # (a piece that
-            # fitted is left as it was: its need is not worked out again)
+        if pc is not was and pc.fitted:  # (a piece that fitted is left as it was: its need is not worked out again)
             need, given = shortest(pc.motion, pc.clip_in, pc.clip_out, limit, flight_times(pc)), pc.span.t1 - pc.span.t0
             if need > given + SQUEEZE_SAID:
                 warnings.warn(f"{track.name} {pc.span.t0 - track.t[0]:.2f}–{pc.span.t1 - track.t[0]:.2f} s: "
@@ -370,7 +369,7 @@ def sequenced(track, segments, choices, times, skeleton, rest, scale, terrain, o
                               "played faster (a slower gesture, or a pause beside it, gives it room)")
     pieces = [replace(pc, pace=paced(pc.motion, pc.clip_in, pc.clip_out, pc.span.t1 - pc.span.t0, limit,
                                      flight_times(pc), None if pc.contacts is None else ~pc.contacts.all(axis=1)))
-              if pc.cycles == 0 and pc.progress is None and pc.gesture is None else pc
+              if pc.fitted else pc
               for pc, limit in zip(pieces, limits)]
     pieces = [in_flight(pc) for pc in pieces]
     spans = [pc.span for pc in pieces]
